@@ -1,0 +1,259 @@
+//! Affine forms over the one time symbol: `x0 + x1·e ± r` (DESIGN.md §1).
+//!
+//! This is the write-up's section 6 with its one flaw mended: the write-up
+//! keeps a single error term and adds `|x1|·|y1|` to it on each product. Here
+//! the product's `x1·y1·e²` term, with `e² ∈ [0, 1]`, moves `x1·y1/2` into the
+//! centre and only `|x1·y1|/2` into the error term, and the error terms'
+//! cross products with the operands are accounted for in full, so the form
+//! is sound and its excess width falls with the square of the node width.
+
+use super::rounding::{add_up, down, err, mul_up, up};
+use super::{Arithmetic, Enclosure, Interval, TimeSpan, series};
+use crate::CcdError;
+use std::ops::{Add, AddAssign, Mul, MulAssign, Neg, Sub, SubAssign};
+
+/// `c + s·e ± r` for the node's local symbol `e ∈ [−1, 1]`, `r ≥ 0`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Affine {
+    /// Centre.
+    pub c: f64,
+    /// Slope on the local time symbol.
+    pub s: f64,
+    /// Error radius: every nonlinear and rounding error so far.
+    pub r: f64,
+}
+
+impl Affine {
+    /// Nothing known: the whole real line.
+    pub const ENTIRE: Affine = Affine {
+        c: 0.0,
+        s: 0.0,
+        r: f64::INFINITY,
+    };
+
+    /// A form with the given parts; non-finite parts give [`Affine::ENTIRE`].
+    fn checked(c: f64, s: f64, r: f64) -> Affine {
+        if c.is_finite() && s.is_finite() && r >= 0.0 && r.is_finite() {
+            Affine { c, s, r }
+        } else {
+            Affine::ENTIRE
+        }
+    }
+
+    /// `|c| + |s|`, rounded up: the largest magnitude of the linear part.
+    fn linear_mag(&self) -> f64 {
+        add_up(self.c.abs(), self.s.abs())
+    }
+}
+
+impl Add for Affine {
+    type Output = Affine;
+    fn add(self, o: Affine) -> Affine {
+        let c = self.c + o.c;
+        let s = self.s + o.s;
+        let r = add_up(add_up(self.r, o.r), add_up(err(c), err(s)));
+        Affine::checked(c, s, r)
+    }
+}
+
+impl Sub for Affine {
+    type Output = Affine;
+    fn sub(self, o: Affine) -> Affine {
+        self + (-o)
+    }
+}
+
+impl Mul for Affine {
+    type Output = Affine;
+    fn mul(self, o: Affine) -> Affine {
+        // (a0 + a1 e)(b0 + b1 e) = a0 b0 + (a0 b1 + a1 b0) e + a1 b1 e²,
+        // e² = ½ + ½(2e² − 1) with 2e² − 1 ∈ [−1, 1].
+        let c00 = self.c * o.c;
+        let half11 = 0.5 * (self.s * o.s);
+        let c = c00 + half11;
+        let (p01, p10) = (self.c * o.s, self.s * o.c);
+        let s = p01 + p10;
+        let rounding = add_up(
+            add_up(err(c00), add_up(err(half11), err(c))),
+            add_up(add_up(err(p01), err(p10)), err(s)),
+        );
+        let cross = add_up(
+            add_up(mul_up(self.linear_mag(), o.r), mul_up(o.linear_mag(), self.r)),
+            mul_up(self.r, o.r),
+        );
+        let r = add_up(add_up(half11.abs(), cross), rounding);
+        Affine::checked(c, s, r)
+    }
+}
+
+impl Neg for Affine {
+    type Output = Affine;
+    fn neg(self) -> Affine {
+        Affine {
+            c: -self.c,
+            s: -self.s,
+            r: self.r,
+        }
+    }
+}
+
+impl Add<f64> for Affine {
+    type Output = Affine;
+    fn add(self, k: f64) -> Affine {
+        let c = self.c + k;
+        Affine::checked(c, self.s, add_up(self.r, err(c)))
+    }
+}
+
+impl Sub<f64> for Affine {
+    type Output = Affine;
+    fn sub(self, k: f64) -> Affine {
+        self + (-k)
+    }
+}
+
+impl Mul<f64> for Affine {
+    type Output = Affine;
+    fn mul(self, k: f64) -> Affine {
+        let (c, s) = (self.c * k, self.s * k);
+        let r = add_up(mul_up(self.r, k.abs()), add_up(err(c), err(s)));
+        Affine::checked(c, s, r)
+    }
+}
+
+impl AddAssign for Affine {
+    fn add_assign(&mut self, o: Affine) {
+        *self = *self + o;
+    }
+}
+
+impl SubAssign for Affine {
+    fn sub_assign(&mut self, o: Affine) {
+        *self = *self - o;
+    }
+}
+
+impl MulAssign for Affine {
+    fn mul_assign(&mut self, o: Affine) {
+        *self = *self * o;
+    }
+}
+
+impl num_traits::Zero for Affine {
+    fn zero() -> Affine {
+        Affine::constant(0.0)
+    }
+    fn is_zero(&self) -> bool {
+        self.c == 0.0 && self.s == 0.0 && self.r == 0.0
+    }
+}
+
+impl num_traits::One for Affine {
+    fn one() -> Affine {
+        Affine::constant(1.0)
+    }
+}
+
+impl Enclosure for Affine {
+    const KIND: Arithmetic = Arithmetic::Affine;
+    const DEGREE: usize = 1;
+
+    fn constant(c: f64) -> Affine {
+        Affine::checked(c, 0.0, 0.0)
+    }
+
+    fn from_interval(iv: Interval) -> Affine {
+        let c = iv.mid();
+        let r = up(iv.hi - c).max(up(c - iv.lo));
+        Affine::checked(c, 0.0, r)
+    }
+
+    fn time(span: TimeSpan) -> Affine {
+        let (m, h) = span.center_radius();
+        Affine::checked(m, h, 0.0)
+    }
+
+    fn range(&self) -> Interval {
+        let s = self.s.abs();
+        Interval::new(
+            down(down(self.c - s) - self.r),
+            up(up(self.c + s) + self.r),
+        )
+    }
+
+    fn linear_lower(&self) -> (f64, f64) {
+        (down(self.c - self.r), self.s)
+    }
+
+    fn widen(self, radius: f64) -> Affine {
+        Affine::checked(self.c, self.s, add_up(self.r, radius))
+    }
+
+    fn scale(self, factor: Interval) -> Affine {
+        // x·f = x·mid(f) + x·(f − mid(f)), the second part bounded by |x|·rad.
+        let mid = factor.mid();
+        let rad = up(factor.hi - mid).max(up(mid - factor.lo));
+        (self * mid).widen(mul_up(self.range().mag(), rad))
+    }
+
+    fn sqr(self) -> Affine {
+        let c00 = self.c * self.c;
+        let half11 = 0.5 * (self.s * self.s);
+        let c = c00 + half11;
+        let s = 2.0 * (self.c * self.s);
+        let rounding = add_up(add_up(err(c00), err(half11)), add_up(err(c), err(s)));
+        let cross = add_up(
+            mul_up(2.0, mul_up(self.linear_mag(), self.r)),
+            mul_up(self.r, self.r),
+        );
+        let r = add_up(add_up(half11, cross), rounding);
+        Affine::checked(c, s, r)
+    }
+
+    fn abs(self) -> Affine {
+        let range = self.range();
+        if range.lo >= 0.0 {
+            self
+        } else if range.hi <= 0.0 {
+            -self
+        } else {
+            // The write-up's advice: |x| through its interval.
+            Affine::from_interval(range.abs())
+        }
+    }
+
+    fn min(self, o: Affine) -> Affine {
+        let (a, b) = (self.range(), o.range());
+        if a.hi <= b.lo {
+            self
+        } else if b.hi <= a.lo {
+            o
+        } else {
+            Affine::from_interval(a.min(b))
+        }
+    }
+
+    fn max(self, o: Affine) -> Affine {
+        -((-self).min(-o))
+    }
+
+    fn sqrt(self) -> Result<Affine, CcdError> {
+        series::sqrt(self)
+    }
+
+    fn recip(self) -> Result<Affine, CcdError> {
+        series::recip(self)
+    }
+
+    fn sin(self) -> Affine {
+        series::trig(self, false)
+    }
+
+    fn cos(self) -> Affine {
+        series::trig(self, true)
+    }
+
+    fn restrict(self, from: TimeSpan, to: TimeSpan) -> Affine {
+        series::restrict_poly(&[self.c, self.s], self.r, from, to)
+    }
+}

@@ -1,0 +1,163 @@
+//! Elementary functions and restriction for the polynomial arithmetics
+//! ([`Affine`](super::Affine), [`Taylor`](super::Taylor)), written once over
+//! the [`Enclosure`] operations.
+//!
+//! A function `f` of an enclosure `x` is expanded about a point `x0` of its
+//! range: `f(x) = Σ_{k≤n} f⁽ᵏ⁾(x0)/k!·δᵏ + R` with `δ = x − x0` and the
+//! Lagrange remainder `|R| ≤ sup|f⁽ⁿ⁺¹⁾|/(n+1)!·|δ|ⁿ⁺¹`, the sup taken over the
+//! range of `x`. The coefficients are enclosed as intervals and `n` is the
+//! arithmetic's degree: higher terms would be folded into the error term by
+//! the multiplications anyway.
+
+use super::{Enclosure, Interval, TimeSpan};
+use crate::CcdError;
+
+/// `Σ coefs[k]·δᵏ ± rem·|δ|ⁿ⁺¹` with `δ = x − x0`, by Horner's rule.
+fn expand<E: Enclosure>(x: E, x0: f64, coefs: &[Interval], rem: Interval) -> E {
+    let delta = x - x0;
+    let n = coefs.len() - 1;
+    let mut acc = E::from_interval(coefs[n]);
+    for k in (0..n).rev() {
+        acc = acc * delta + E::from_interval(coefs[k]);
+    }
+    let dmax = Interval::point(delta.range().mag());
+    let mut tail = rem;
+    for _ in 0..=n {
+        tail = tail * dmax;
+    }
+    acc.widen(tail.hi)
+}
+
+/// Of two enclosures of the same value, the one with the narrower range.
+fn narrower<E: Enclosure>(a: E, b: E) -> E {
+    if a.range().width() <= b.range().width() {
+        a
+    } else {
+        b
+    }
+}
+
+/// `1/k!` enclosed (k! itself is exact in f64 for the small k used here).
+fn inv_factorial(k: usize) -> Interval {
+    let factorial = (1..=k).fold(1.0, |f, i| f * i as f64);
+    inv(factorial)
+}
+
+/// `1/x` enclosed, for a non-zero constant `x`.
+fn inv(x: f64) -> Interval {
+    Interval::point(x).recip().unwrap_or(Interval::ENTIRE)
+}
+
+/// `(1/2 − (k − 1))/k`: the ratio of binom(1/2, k) to binom(1/2, k − 1).
+fn half_binomial_ratio(k: usize) -> Interval {
+    Interval::point(0.5 - (k - 1) as f64) * inv(k as f64)
+}
+
+/// sin or cos (`cosine = true`) of any enclosure: the series about the
+/// range's midpoint, or `[−1, 1]` information alone when that is narrower.
+pub(crate) fn trig<E: Enclosure>(x: E, cosine: bool) -> E {
+    let range = x.range();
+    if !range.is_bounded() || range.width() > 8.0 {
+        // Beyond about a turn the series says less than |f| ≤ 1.
+        return E::from_interval(Interval::new(-1.0, 1.0));
+    }
+    let x0 = range.mid();
+    let n = E::DEGREE.max(1);
+    // f(x0), f'(x0), f''(x0)/2, …: derivatives cycle sin, cos, −sin, −cos.
+    let (s, c) = (
+        Interval::around(x0.sin(), super::rounding::LIBM_SLACK),
+        Interval::around(x0.cos(), super::rounding::LIBM_SLACK),
+    );
+    let cycle = if cosine {
+        [c, -s, -c, s]
+    } else {
+        [s, c, -s, -c]
+    };
+    let mut coefs = [Interval::point(0.0); 8];
+    for (k, coef) in coefs.iter_mut().enumerate().take(n + 1) {
+        *coef = cycle[k % 4] * inv_factorial(k);
+    }
+    let series = expand(x, x0, &coefs[..=n], inv_factorial(n + 1));
+    let clamp = series.range();
+    if clamp.lo < -1.0 || clamp.hi > 1.0 {
+        let bounded = Interval::new(clamp.lo.max(-1.0), clamp.hi.min(1.0));
+        narrower(series, E::from_interval(bounded))
+    } else {
+        series
+    }
+}
+
+/// `√x`; see [`Enclosure::sqrt`] for the domain rule.
+pub(crate) fn sqrt<E: Enclosure>(x: E) -> Result<E, CcdError> {
+    let range = x.range();
+    let whole = range.sqrt()?;
+    if range.lo <= 0.0 || !range.is_bounded() {
+        // No series about a point near zero: the range's own root.
+        return Ok(E::from_interval(whole));
+    }
+    let x0 = range.mid();
+    let n = E::DEGREE.max(1);
+    // coef_k = binom(1/2, k)·x0^(1/2 − k), built from coef_{k−1}.
+    let inv_x0 = Interval::point(x0).recip()?;
+    let mut coefs = [Interval::point(0.0); 8];
+    coefs[0] = Interval::point(x0).sqrt()?;
+    for k in 1..=n {
+        coefs[k] = coefs[k - 1] * half_binomial_ratio(k) * inv_x0;
+    }
+    // |binom(1/2, n+1)|·a^(1/2 − n − 1) at the range's low end a.
+    let mut rem = Interval::point(range.lo).sqrt()?;
+    let mut binom = Interval::point(1.0);
+    let inv_a = Interval::point(range.lo).recip()?;
+    for k in 1..=n + 1 {
+        binom = binom * half_binomial_ratio(k);
+        rem = rem * inv_a;
+    }
+    let rem = (binom * rem).abs();
+    let series = expand(x, x0, &coefs[..=n], rem);
+    Ok(narrower(series, E::from_interval(whole)))
+}
+
+/// `1/x`; a range holding zero is a `Domain` error.
+pub(crate) fn recip<E: Enclosure>(x: E) -> Result<E, CcdError> {
+    let range = x.range();
+    let whole = range.recip()?;
+    if !range.is_bounded() {
+        return Ok(E::from_interval(whole));
+    }
+    let x0 = range.mid();
+    let n = E::DEGREE.max(1);
+    // coef_k = (−1)^k / x0^(k+1).
+    let inv_x0 = Interval::point(x0).recip()?;
+    let mut coefs = [Interval::point(0.0); 8];
+    coefs[0] = inv_x0;
+    for k in 1..=n {
+        coefs[k] = -(coefs[k - 1] * inv_x0);
+    }
+    // sup |x|^−(n+2) over the range: at the end nearest zero.
+    let nearest = Interval::point(range.lo.abs().min(range.hi.abs())).recip()?;
+    let mut rem = Interval::point(1.0);
+    for _ in 0..n + 2 {
+        rem = rem * nearest;
+    }
+    let series = expand(x, x0, &coefs[..=n], rem);
+    Ok(narrower(series, E::from_interval(whole)))
+}
+
+/// The polynomial `Σ coefs[k]·eᵏ ± r` of node `from`, re-expressed in the
+/// local symbol of its sub-node `to`, by Horner's rule in `E` itself:
+/// `e = (τ − m)/h` with `τ` the time over `to`.
+pub(crate) fn restrict_poly<E: Enclosure>(coefs: &[f64], r: f64, from: TimeSpan, to: TimeSpan) -> E {
+    let (m, h) = from.center_radius();
+    let Ok(inv_h) = Interval::point(h).recip() else {
+        // A point node: the function is one (uncertain) value.
+        let mag: f64 = coefs.iter().map(|c| c.abs()).sum();
+        return E::from_interval(Interval::around(coefs[0], mag + r));
+    };
+    let e = (E::time(to) - m).scale(inv_h);
+    let n = coefs.len() - 1;
+    let mut acc = E::constant(coefs[n]);
+    for k in (0..n).rev() {
+        acc = acc * e + coefs[k];
+    }
+    acc.widen(r)
+}

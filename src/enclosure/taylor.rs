@@ -1,0 +1,322 @@
+//! Taylor models: a polynomial of degree `K − 1` in the node's time symbol
+//! plus a symmetric error term, DESIGN.md §2.
+//!
+//! Products are truncated at degree `K − 1`; each dropped term `c·eᵏ` is
+//! bounded over `e ∈ [−1, 1]` (even `k`: `c/2 ± |c|/2`, odd: `±|c|`) and
+//! moved into the centre and the error term. Degree 1 would be [`Affine`]
+//! (which has its own, faster type).
+//!
+//! [`Affine`]: super::Affine
+
+use super::rounding::{add_up, down, err, mul_up, up};
+use super::{Arithmetic, Enclosure, Interval, TimeSpan, series};
+use crate::CcdError;
+use std::ops::{Add, AddAssign, Mul, MulAssign, Neg, Sub, SubAssign};
+
+/// `Σ_{k<K} c[k]·eᵏ ± r` for the node's local symbol `e ∈ [−1, 1]`.
+/// `K` is the number of coefficients, from 2 to 8.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Taylor<const K: usize> {
+    /// Coefficients of `e⁰ … e^(K−1)`.
+    pub c: [f64; K],
+    /// Error radius, `≥ 0`.
+    pub r: f64,
+}
+
+/// Taylor models of degree 2.
+pub type Taylor2 = Taylor<3>;
+/// Taylor models of degree 3.
+pub type Taylor3 = Taylor<4>;
+
+impl<const K: usize> Taylor<K> {
+    /// Products fold at most `2K − 2` degrees; 8 coefficients is plenty.
+    const SUPPORTED: () = assert!(K >= 2 && K <= 8, "Taylor<K> needs 2 <= K <= 8");
+
+    /// Nothing known: the whole real line.
+    pub const ENTIRE: Taylor<K> = Taylor {
+        c: [0.0; K],
+        r: f64::INFINITY,
+    };
+
+    /// A model with the given parts; non-finite parts give the whole line.
+    fn checked(c: [f64; K], r: f64) -> Taylor<K> {
+        #[allow(clippy::let_unit_value)]
+        let _ = Self::SUPPORTED;
+        if c.iter().all(|x| x.is_finite()) && r >= 0.0 && r.is_finite() {
+            Taylor { c, r }
+        } else {
+            Taylor::ENTIRE
+        }
+    }
+
+    /// `Σ|c[k]|` rounded up: the largest magnitude of the polynomial part.
+    fn poly_mag(&self) -> f64 {
+        self.c.iter().fold(0.0, |m, x| add_up(m, x.abs()))
+    }
+
+    /// Bounds of `c[k]·eᵏ` over `e ∈ [−1, 1]`, `k ≥ 1`.
+    fn term_bounds(k: usize, coef: f64) -> (f64, f64) {
+        if k % 2 == 0 {
+            (coef.min(0.0), coef.max(0.0))
+        } else {
+            (-coef.abs(), coef.abs())
+        }
+    }
+
+    /// True when the polynomial part is monotone on `[−1, 1]`:
+    /// `|c1| > Σ_{k≥2} k·|c[k]|` bounds `|p'(e)|` away from zero.
+    fn is_monotone(&self) -> bool {
+        let higher = (2..K).fold(0.0, |m, k| add_up(m, mul_up(k as f64, self.c[k].abs())));
+        self.c[1].abs() > higher
+    }
+
+    /// The polynomial part at `e = ±1`, enclosed.
+    fn at_end(&self, e: f64) -> Interval {
+        let mut acc = Interval::point(self.c[K - 1]);
+        for k in (0..K - 1).rev() {
+            acc = acc * Interval::point(e) + Interval::point(self.c[k]);
+        }
+        acc
+    }
+}
+
+impl<const K: usize> Add for Taylor<K> {
+    type Output = Taylor<K>;
+    fn add(self, o: Taylor<K>) -> Taylor<K> {
+        let mut c = [0.0; K];
+        let mut r = add_up(self.r, o.r);
+        for k in 0..K {
+            c[k] = self.c[k] + o.c[k];
+            r = add_up(r, err(c[k]));
+        }
+        Taylor::checked(c, r)
+    }
+}
+
+impl<const K: usize> Sub for Taylor<K> {
+    type Output = Taylor<K>;
+    fn sub(self, o: Taylor<K>) -> Taylor<K> {
+        self + (-o)
+    }
+}
+
+impl<const K: usize> Mul for Taylor<K> {
+    type Output = Taylor<K>;
+    fn mul(self, o: Taylor<K>) -> Taylor<K> {
+        // Full product into `full`, each product's and sum's rounding error
+        // into `r`; then fold degrees ≥ K.
+        let mut full = [0.0; 16];
+        let mut r = 0.0;
+        for i in 0..K {
+            for j in 0..K {
+                let p = self.c[i] * o.c[j];
+                let sum = full[i + j] + p;
+                r = add_up(r, add_up(err(p), err(sum)));
+                full[i + j] = sum;
+            }
+        }
+        let mut c = [0.0; K];
+        c.copy_from_slice(&full[..K]);
+        for (k, &coef) in full.iter().enumerate().take(2 * K - 1).skip(K) {
+            if k % 2 == 0 {
+                let half = 0.5 * coef;
+                c[0] += half;
+                r = add_up(r, add_up(half.abs(), err(c[0])));
+            } else {
+                r = add_up(r, coef.abs());
+            }
+        }
+        let cross = add_up(
+            add_up(mul_up(self.poly_mag(), o.r), mul_up(o.poly_mag(), self.r)),
+            mul_up(self.r, o.r),
+        );
+        Taylor::checked(c, add_up(r, cross))
+    }
+}
+
+impl<const K: usize> Neg for Taylor<K> {
+    type Output = Taylor<K>;
+    fn neg(self) -> Taylor<K> {
+        Taylor {
+            c: self.c.map(|x| -x),
+            r: self.r,
+        }
+    }
+}
+
+impl<const K: usize> Add<f64> for Taylor<K> {
+    type Output = Taylor<K>;
+    fn add(self, k: f64) -> Taylor<K> {
+        let mut c = self.c;
+        c[0] += k;
+        Taylor::checked(c, add_up(self.r, err(c[0])))
+    }
+}
+
+impl<const K: usize> Sub<f64> for Taylor<K> {
+    type Output = Taylor<K>;
+    fn sub(self, k: f64) -> Taylor<K> {
+        self + (-k)
+    }
+}
+
+impl<const K: usize> Mul<f64> for Taylor<K> {
+    type Output = Taylor<K>;
+    fn mul(self, k: f64) -> Taylor<K> {
+        let c = self.c.map(|x| x * k);
+        let r = c
+            .iter()
+            .fold(mul_up(self.r, k.abs()), |r, x| add_up(r, err(*x)));
+        Taylor::checked(c, r)
+    }
+}
+
+impl<const K: usize> AddAssign for Taylor<K> {
+    fn add_assign(&mut self, o: Taylor<K>) {
+        *self = *self + o;
+    }
+}
+
+impl<const K: usize> SubAssign for Taylor<K> {
+    fn sub_assign(&mut self, o: Taylor<K>) {
+        *self = *self - o;
+    }
+}
+
+impl<const K: usize> MulAssign for Taylor<K> {
+    fn mul_assign(&mut self, o: Taylor<K>) {
+        *self = *self * o;
+    }
+}
+
+impl<const K: usize> num_traits::Zero for Taylor<K> {
+    fn zero() -> Taylor<K> {
+        Taylor::constant(0.0)
+    }
+    fn is_zero(&self) -> bool {
+        self.r == 0.0 && self.c.iter().all(|x| *x == 0.0)
+    }
+}
+
+impl<const K: usize> num_traits::One for Taylor<K> {
+    fn one() -> Taylor<K> {
+        Taylor::constant(1.0)
+    }
+}
+
+impl<const K: usize> Enclosure for Taylor<K> {
+    const KIND: Arithmetic = match K {
+        3 => Arithmetic::Taylor2,
+        4 => Arithmetic::Taylor3,
+        // Other degrees are usable but have no named kind; they report as
+        // the nearest named one.
+        2 => Arithmetic::Affine,
+        _ => Arithmetic::Taylor3,
+    };
+    const DEGREE: usize = K - 1;
+
+    fn constant(x: f64) -> Taylor<K> {
+        let mut c = [0.0; K];
+        c[0] = x;
+        Taylor::checked(c, 0.0)
+    }
+
+    fn from_interval(iv: Interval) -> Taylor<K> {
+        let mid = iv.mid();
+        let mut c = [0.0; K];
+        c[0] = mid;
+        Taylor::checked(c, up(iv.hi - mid).max(up(mid - iv.lo)))
+    }
+
+    fn time(span: TimeSpan) -> Taylor<K> {
+        let (m, h) = span.center_radius();
+        let mut c = [0.0; K];
+        c[0] = m;
+        c[1] = h;
+        Taylor::checked(c, 0.0)
+    }
+
+    fn range(&self) -> Interval {
+        let poly = if self.is_monotone() {
+            // Exact up to rounding: the values at the two ends.
+            self.at_end(-1.0).hull(self.at_end(1.0))
+        } else {
+            let (mut lo, mut hi) = (self.c[0], self.c[0]);
+            for k in 1..K {
+                let (a, b) = Self::term_bounds(k, self.c[k]);
+                lo = down(lo + a);
+                hi = up(hi + b);
+            }
+            Interval::new(lo, hi)
+        };
+        Interval::new(down(poly.lo - self.r), up(poly.hi + self.r))
+    }
+
+    fn linear_lower(&self) -> (f64, f64) {
+        let mut a = down(self.c[0] - self.r);
+        for k in 2..K {
+            a = down(a + Self::term_bounds(k, self.c[k]).0);
+        }
+        (a, self.c[1])
+    }
+
+    fn widen(self, radius: f64) -> Taylor<K> {
+        Taylor::checked(self.c, add_up(self.r, radius))
+    }
+
+    fn scale(self, factor: Interval) -> Taylor<K> {
+        let mid = factor.mid();
+        let rad = up(factor.hi - mid).max(up(mid - factor.lo));
+        (self * mid).widen(mul_up(self.range().mag(), rad))
+    }
+
+    fn sqr(self) -> Taylor<K> {
+        self * self
+    }
+
+    fn abs(self) -> Taylor<K> {
+        let range = self.range();
+        if range.lo >= 0.0 {
+            self
+        } else if range.hi <= 0.0 {
+            -self
+        } else {
+            Taylor::from_interval(range.abs())
+        }
+    }
+
+    fn min(self, o: Taylor<K>) -> Taylor<K> {
+        let (a, b) = (self.range(), o.range());
+        if a.hi <= b.lo {
+            self
+        } else if b.hi <= a.lo {
+            o
+        } else {
+            Taylor::from_interval(a.min(b))
+        }
+    }
+
+    fn max(self, o: Taylor<K>) -> Taylor<K> {
+        -((-self).min(-o))
+    }
+
+    fn sqrt(self) -> Result<Taylor<K>, CcdError> {
+        series::sqrt(self)
+    }
+
+    fn recip(self) -> Result<Taylor<K>, CcdError> {
+        series::recip(self)
+    }
+
+    fn sin(self) -> Taylor<K> {
+        series::trig(self, false)
+    }
+
+    fn cos(self) -> Taylor<K> {
+        series::trig(self, true)
+    }
+
+    fn restrict(self, from: TimeSpan, to: TimeSpan) -> Taylor<K> {
+        series::restrict_poly(&self.c, self.r, from, to)
+    }
+}
