@@ -20,3 +20,5 @@ pub use enclosure::{Affine, Arithmetic, Enclosure, Interval, Taylor, Taylor2, Ta
 pub use error::CcdError;
 
 
+pub use motion::{Motion, Pose, Trajectory};
+pub use solve::{GapSet, RootStatus, SolveOptions, SolveOutcome, SolveStats, Solver, solve_in};

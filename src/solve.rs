@@ -1,1 +1,488 @@
-//! placeholder
+//! The earliest-root search over many distance functions at once.
+//!
+//! The input is a set of *pairs*; each pair is a list of *axis* functions
+//! `D_k(τ)`, each enclosed by the [`GapSet`] over any node of time. A pair is
+//! apart at `τ` when **any** of its axes is positive (separating axes compose
+//! as AND); the set is apart when **every** pair is (shapes compose as OR),
+//! DESIGN.md §3. Skins are the gap functions' business: an axis is written
+//! so that `D_k > 0` means "farther apart than the skin".
+//!
+//! The search walks nodes of time depth-first, earlier half first. On each
+//! node it
+//! 1. evaluates the alive axes of the alive pairs;
+//! 2. drops pairs that an axis proves apart (lower bound > 0), and inside a
+//!    surviving pair drops axes that can never separate on this node's
+//!    sub-nodes (upper bound below another axis's lower bound);
+//! 3. clips the node with each axis's linear lower bound (DESIGN.md §6): only
+//!    where every axis of some pair may be `≤ 0` can a root lie;
+//! 4. stops when the clipped node is at most `ε` wide, reporting its start:
+//!    every earlier time has been excluded, so the report is never late;
+//! 5. re-evaluates the clipped node when clipping removed enough of it, and
+//!    bisects it otherwise.
+//!
+//! Buffers live in a [`Solver`] that callers keep between queries; the node
+//! loop itself allocates nothing once they have grown.
+
+use crate::enclosure::{Arithmetic, Enclosure, Interval, TimeSpan};
+use crate::enclosure::{Affine, Taylor2, Taylor3};
+use crate::error::CcdError;
+
+/// The most axes one pair may have (a bit mask of `u64` tracks them).
+pub const MAX_AXES: usize = 64;
+
+/// A set of pairs of shapes, each a list of axis gap functions.
+pub trait GapSet<E: Enclosure> {
+    /// How many pairs the set starts with; pairs are numbered from 0.
+    fn pair_count(&self) -> usize;
+
+    /// How many axes pair `pair` has (at most [`MAX_AXES`]).
+    fn axis_count(&self, pair: usize) -> usize;
+
+    /// Called once per node before any pair is evaluated on it, e.g. to
+    /// compute each body's pose once for all its pairs.
+    fn begin_node(&mut self, _span: TimeSpan) {}
+
+    /// Enclose, over `span`, each axis `k` of `pair` whose bit is set in
+    /// `axes`, into `out[k]`. Other entries of `out` are left as they are.
+    fn eval(&mut self, pair: usize, span: TimeSpan, axes: u64, out: &mut [E]);
+
+    /// A composite pair (a shape against a mesh, say) may stand for many
+    /// sub-pairs. When `pair` is one and was not proved apart on `span`, push
+    /// the numbers of the sub-pairs that may touch on `span` into `out` and
+    /// return `true`: the search then follows those instead. The default:
+    /// no pair is composite.
+    fn expand(&mut self, _pair: usize, _span: TimeSpan, _out: &mut Vec<u32>) -> bool {
+        false
+    }
+}
+
+/// Search parameters.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SolveOptions {
+    /// Accuracy in time, as a fraction of the step: the reported time is at
+    /// most `epsilon` before the true one (for a transversal contact).
+    pub epsilon: f64,
+    /// The most pair evaluations one search may spend. When it runs out the
+    /// answer is the earliest time not yet excluded, never "no hit".
+    pub max_evaluations: u64,
+    /// The part of the step to search, within `[0, 1]`.
+    pub span: TimeSpan,
+}
+
+impl Default for SolveOptions {
+    fn default() -> SolveOptions {
+        SolveOptions {
+            epsilon: 1.0e-4,
+            max_evaluations: 100_000,
+            span: TimeSpan::STEP,
+        }
+    }
+}
+
+impl SolveOptions {
+    /// `Ok` when every parameter is in range.
+    pub fn validate(&self) -> Result<(), CcdError> {
+        if !(self.epsilon > 0.0 && self.epsilon <= 1.0) {
+            return Err(CcdError::BadParameter {
+                what: "epsilon",
+                value: self.epsilon,
+                expected: "0 < epsilon <= 1 (a fraction of the step)",
+            });
+        }
+        if self.max_evaluations == 0 {
+            return Err(CcdError::BadParameter {
+                what: "max_evaluations",
+                value: 0.0,
+                expected: "at least 1",
+            });
+        }
+        let TimeSpan { lo, hi } = self.span;
+        if !(0.0 <= lo && lo <= hi && hi <= 1.0) {
+            return Err(CcdError::BadParameter {
+                what: "time range",
+                value: if (0.0..=1.0).contains(&lo) { hi } else { lo },
+                expected: "0 <= start <= end <= 1",
+            });
+        }
+        Ok(())
+    }
+}
+
+/// How a search ended.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum RootStatus {
+    /// Some pair may touch at the reported time, and at no earlier time.
+    Hit,
+    /// Some pair may already touch at the start of the span.
+    InitiallyTouching,
+    /// Every pair is apart over the whole span.
+    Separated,
+    /// The evaluation budget ran out; the reported time is the earliest not
+    /// yet excluded (a conservative answer).
+    BudgetExhausted,
+}
+
+/// What one search spent.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct SolveStats {
+    /// Nodes of time visited.
+    pub nodes: u64,
+    /// Pair evaluations (one pair on one node).
+    pub pair_evaluations: u64,
+    /// Axis evaluations (one axis function on one node).
+    pub axis_evaluations: u64,
+}
+
+impl std::ops::AddAssign for SolveStats {
+    fn add_assign(&mut self, o: SolveStats) {
+        self.nodes += o.nodes;
+        self.pair_evaluations += o.pair_evaluations;
+        self.axis_evaluations += o.axis_evaluations;
+    }
+}
+
+/// The answer of a search.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SolveOutcome {
+    pub status: RootStatus,
+    /// The reported time, a fraction of the step (`span.hi` when separated).
+    pub time: f64,
+    /// The pair that may touch (none when separated).
+    pub pair: Option<usize>,
+    pub stats: SolveStats,
+}
+
+/// One node waiting on the depth-first stack: its span and the range of
+/// the arena that lists its alive pairs.
+#[derive(Clone, Copy, Debug)]
+struct Frame {
+    span: TimeSpan,
+    start: usize,
+    end: usize,
+}
+
+/// An alive pair on a node: its number and its alive axes.
+#[derive(Clone, Copy, Debug)]
+struct Alive {
+    pair: u32,
+    axes: u64,
+}
+
+/// When clipping leaves less than this share of a node, the clipped node
+/// is evaluated again instead of bisected: near a simple root the linear
+/// bound converges much faster than halving (DESIGN.md §6); a smaller
+/// shrink is not worth an evaluation of its own.
+const RECLIP_SHARE: f64 = 0.6;
+
+/// Reusable buffers for searches; keep one per thread and call
+/// [`Solver::solve`] as often as needed.
+#[derive(Debug, Default)]
+pub struct Solver {
+    stack: Vec<Frame>,
+    arena: Vec<Alive>,
+    pending: Vec<Alive>,
+    children: Vec<u32>,
+}
+
+impl Solver {
+    pub fn new() -> Solver {
+        Solver::default()
+    }
+
+    /// The earliest time in `options.span` at which some pair of `gaps`
+    /// may touch, searched in the arithmetic `E`.
+    pub fn solve<E: Enclosure, G: GapSet<E>>(
+        &mut self,
+        gaps: &mut G,
+        options: &SolveOptions,
+    ) -> Result<SolveOutcome, CcdError> {
+        options.validate()?;
+        let mut stats = SolveStats::default();
+        let span = options.span;
+        self.stack.clear();
+        self.arena.clear();
+        for pair in 0..gaps.pair_count() {
+            let axes = gaps.axis_count(pair);
+            if axes > MAX_AXES {
+                return Err(CcdError::BadParameter {
+                    what: "axes in one pair",
+                    value: axes as f64,
+                    expected: "at most 64",
+                });
+            }
+            self.arena.push(Alive {
+                pair: pair as u32,
+                axes: full_mask(axes),
+            });
+        }
+        let (start, end) = (0, self.arena.len());
+        // Touching at the very start is its own answer.
+        let at_start = TimeSpan::new(span.lo, span.lo);
+        if let Some(pair) = self.first_touching(gaps, at_start, start, end, &mut stats) {
+            return Ok(SolveOutcome {
+                status: RootStatus::InitiallyTouching,
+                time: span.lo,
+                pair: Some(pair),
+                stats,
+            });
+        }
+        self.stack.push(Frame { span, start, end });
+        while let Some(frame) = self.stack.pop() {
+            self.arena.truncate(frame.end);
+            if stats.pair_evaluations >= options.max_evaluations {
+                return Ok(SolveOutcome {
+                    status: RootStatus::BudgetExhausted,
+                    time: frame.span.lo,
+                    pair: self.arena.get(frame.start).map(|a| a.pair as usize),
+                    stats,
+                });
+            }
+            let Some(node) = self.visit(gaps, frame, &mut stats) else {
+                continue; // every pair apart on this node
+            };
+            let clipped = node.span;
+            if clipped.width() <= options.epsilon {
+                return Ok(SolveOutcome {
+                    status: RootStatus::Hit,
+                    time: clipped.lo,
+                    pair: Some(node.earliest_pair),
+                    stats,
+                });
+            }
+            let (start, end) = (node.start, node.end);
+            if clipped.width() < RECLIP_SHARE * frame.span.width() {
+                self.stack.push(Frame {
+                    span: clipped,
+                    start,
+                    end,
+                });
+                continue;
+            }
+            let mid = clipped.lo + 0.5 * clipped.width();
+            if !(clipped.lo < mid && mid < clipped.hi) {
+                // No float between the ends: the node cannot be split.
+                return Ok(SolveOutcome {
+                    status: RootStatus::Hit,
+                    time: clipped.lo,
+                    pair: Some(node.earliest_pair),
+                    stats,
+                });
+            }
+            self.stack.push(Frame {
+                span: TimeSpan::new(mid, clipped.hi),
+                start,
+                end,
+            });
+            self.stack.push(Frame {
+                span: TimeSpan::new(clipped.lo, mid),
+                start,
+                end,
+            });
+        }
+        Ok(SolveOutcome {
+            status: RootStatus::Separated,
+            time: span.hi,
+            pair: None,
+            stats,
+        })
+    }
+
+    /// The first pair in `arena[start..end]` that may touch on `span`
+    /// (used on the point span at the start).
+    fn first_touching<E: Enclosure, G: GapSet<E>>(
+        &mut self,
+        gaps: &mut G,
+        span: TimeSpan,
+        start: usize,
+        end: usize,
+        stats: &mut SolveStats,
+    ) -> Option<usize> {
+        let mut out = [E::zero(); MAX_AXES];
+        gaps.begin_node(span);
+        stats.nodes += 1;
+        let mut queue: Vec<u32> = self.arena[start..end].iter().map(|a| a.pair).collect();
+        while let Some(pair) = queue.pop() {
+            let pair = pair as usize;
+            let axes = full_mask(gaps.axis_count(pair));
+            gaps.eval(pair, span, axes, &mut out);
+            stats.pair_evaluations += 1;
+            stats.axis_evaluations += u64::from(axes.count_ones());
+            if (0..MAX_AXES).any(|k| axes >> k & 1 == 1 && out[k].range().lo > 0.0) {
+                continue;
+            }
+            self.children.clear();
+            if gaps.expand(pair, span, &mut self.children) {
+                queue.extend_from_slice(&self.children);
+                continue;
+            }
+            return Some(pair);
+        }
+        None
+    }
+
+    /// Evaluate one node: prune, drop axes, clip. `None` when every pair is
+    /// apart; otherwise the clipped span and the surviving pairs, appended
+    /// to the arena.
+    fn visit<E: Enclosure, G: GapSet<E>>(
+        &mut self,
+        gaps: &mut G,
+        frame: Frame,
+        stats: &mut SolveStats,
+    ) -> Option<Visited> {
+        let span = frame.span;
+        gaps.begin_node(span);
+        stats.nodes += 1;
+        let mut out = [E::zero(); MAX_AXES];
+        // Feasible part of the node in the local symbol e ∈ [−1, 1].
+        let (mut e_lo, mut e_hi) = (f64::INFINITY, f64::NEG_INFINITY);
+        let mut earliest_pair = 0usize;
+        // Pairs to look at: the frame's list (left intact for its sibling
+        // node), then any sub-pairs that composites expand into.
+        let mut cursor = frame.start;
+        self.pending.clear();
+        loop {
+            let item = if cursor < frame.end {
+                cursor += 1;
+                self.arena[cursor - 1]
+            } else if let Some(item) = self.pending.pop() {
+                item
+            } else {
+                break;
+            };
+            let pair = item.pair as usize;
+            gaps.eval(pair, span, item.axes, &mut out);
+            stats.pair_evaluations += 1;
+            stats.axis_evaluations += u64::from(item.axes.count_ones());
+            let Some((axes, lo, hi)) = judge_pair(&out, item.axes) else {
+                continue;
+            };
+            self.children.clear();
+            if gaps.expand(pair, span, &mut self.children) {
+                for &child in &self.children {
+                    let n = gaps.axis_count(child as usize).min(MAX_AXES);
+                    self.pending.push(Alive {
+                        pair: child,
+                        axes: full_mask(n),
+                    });
+                }
+                continue;
+            }
+            if lo > hi {
+                continue;
+            }
+            if lo < e_lo {
+                e_lo = lo;
+                earliest_pair = pair;
+            }
+            e_hi = e_hi.max(hi);
+            self.arena.push(Alive {
+                pair: item.pair,
+                axes,
+            });
+        }
+        if e_lo > e_hi {
+            return None;
+        }
+        let (m, h) = span.center_radius();
+        // τ = m + h·e takes two roundings: step out by a few ulps of the sum.
+        let to_time = |e: f64, direction: f64| {
+            let t = m + h * e;
+            t + direction * 4.0 * f64::EPSILON * (m.abs() + (h * e).abs())
+        };
+        let lo = to_time(e_lo, -1.0).max(span.lo);
+        let hi = to_time(e_hi, 1.0).min(span.hi);
+        let clipped = if lo <= hi {
+            TimeSpan::new(lo, hi)
+        } else {
+            // Rounding crossed the ends over; keep the node whole.
+            span
+        };
+        Some(Visited {
+            span: clipped,
+            start: frame.end,
+            end: self.arena.len(),
+            earliest_pair,
+        })
+    }
+}
+
+/// A visited node that may hold a root.
+struct Visited {
+    span: TimeSpan,
+    start: usize,
+    end: usize,
+    earliest_pair: usize,
+}
+
+/// The mask with the low `n` bits set.
+fn full_mask(n: usize) -> u64 {
+    if n >= 64 { u64::MAX } else { (1u64 << n) - 1 }
+}
+
+/// Judge one pair from its enclosed axes: `None` when an axis proves it
+/// apart; otherwise the axes worth keeping and the part `[lo, hi]` of
+/// `e ∈ [−1, 1]` where every axis's linear lower bound is `≤ 0` (empty,
+/// `lo > hi`, when the linear bounds alone exclude the node).
+fn judge_pair<E: Enclosure>(out: &[E], axes: u64) -> Option<(u64, f64, f64)> {
+    let mut best_lo = f64::NEG_INFINITY;
+    let (mut e_lo, mut e_hi) = (-1.0f64, 1.0f64);
+    let mut ranges = [Interval::point(0.0); MAX_AXES];
+    for (k, slot) in ranges.iter_mut().enumerate() {
+        if axes >> k & 1 == 0 {
+            continue;
+        }
+        let range = out[k].range();
+        if range.lo > 0.0 {
+            return None;
+        }
+        *slot = range;
+        best_lo = best_lo.max(range.lo);
+        // a + b·e ≤ 0 where the axis may be non-positive.
+        let (a, b) = out[k].linear_lower();
+        if b > 0.0 {
+            e_hi = e_hi.min(widen_out((-a) / b, 1.0));
+        } else if b < 0.0 {
+            e_lo = e_lo.max(widen_out((-a) / b, -1.0));
+        } else if a > 0.0 {
+            e_lo = 1.0;
+            e_hi = -1.0;
+        }
+    }
+    // An axis whose upper bound is below another's lower bound never
+    // separates where that other one does not: drop it.
+    let mut kept = axes;
+    for (k, range) in ranges.iter().enumerate() {
+        if axes >> k & 1 == 1 && range.hi < best_lo {
+            kept &= !(1u64 << k);
+        }
+    }
+    Some((kept, e_lo, e_hi))
+}
+
+/// A root of the linear bound computed in floats, moved outward (towards
+/// `direction`) past its rounding error so no feasible `e` is cut off.
+fn widen_out(q: f64, direction: f64) -> f64 {
+    if q.is_nan() {
+        return direction;
+    }
+    q + direction * (1.0e-12 * (1.0 + q.abs()))
+}
+
+/// Run one search in the arithmetic `kind` on a gap set written generically
+/// over the arithmetic (a convenience over [`Solver::solve`]).
+pub fn solve_in<G>(
+    kind: Arithmetic,
+    solver: &mut Solver,
+    gaps: &mut G,
+    options: &SolveOptions,
+) -> Result<SolveOutcome, CcdError>
+where
+    G: GapSet<Interval> + GapSet<Affine> + GapSet<Taylor2> + GapSet<Taylor3>,
+{
+    match kind {
+        Arithmetic::Interval => solver.solve::<Interval, G>(gaps, options),
+        Arithmetic::Affine => solver.solve::<Affine, G>(gaps, options),
+        Arithmetic::Taylor2 => solver.solve::<Taylor2, G>(gaps, options),
+        Arithmetic::Taylor3 => solver.solve::<Taylor3, G>(gaps, options),
+    }
+}
