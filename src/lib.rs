@@ -11,14 +11,17 @@
 //!
 //! Data goes one way: motion → distance functions → solver → the caller.
 
+pub mod convert;
 pub mod enclosure;
 pub mod error;
+pub(crate) mod gap;
 pub mod motion;
+pub mod query;
 pub mod solve;
 
 pub use enclosure::{Affine, Arithmetic, Enclosure, Interval, Taylor, Taylor2, Taylor3, TimeSpan};
 pub use error::CcdError;
 
-
 pub use motion::{Motion, Pose, Trajectory};
+pub use query::{ManyToi, QueryOptions, ShapeMotion, Toi, time_of_impact, time_of_impact_many};
 pub use solve::{GapSet, RootStatus, SolveOptions, SolveOutcome, SolveStats, Solver, solve_in};

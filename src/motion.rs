@@ -113,7 +113,11 @@ impl Spin {
         );
         let k2 = Matrix3::from_fn(|i, j| {
             let kk = k[i] * k[j];
-            if i == j { kk - Interval::point(1.0) } else { kk }
+            if i == j {
+                kk - Interval::point(1.0)
+            } else {
+                kk
+            }
         });
         Some(Spin { angle, k: skew, k2 })
     }
@@ -297,7 +301,9 @@ impl Motion {
 
     /// True when the frame neither moves nor turns.
     pub fn is_fixed(&self) -> bool {
-        self.spin.is_none() && self.displacement == Vector3::zeros() && self.bend == Vector3::zeros()
+        self.spin.is_none()
+            && self.displacement == Vector3::zeros()
+            && self.bend == Vector3::zeros()
     }
 
     /// An upper bound on how far any point within `radius` metres of the
@@ -363,7 +369,9 @@ impl Trajectory for Motion {
                         + turn[(i, 2)] * self.start_matrix[(2, j)]
                 });
                 let arm = Vector3::from_fn(|i, _| {
-                    turn[(i, 0)] * self.arm.x + turn[(i, 1)] * self.arm.y + turn[(i, 2)] * self.arm.z
+                    turn[(i, 0)] * self.arm.x
+                        + turn[(i, 1)] * self.arm.y
+                        + turn[(i, 2)] * self.arm.z
                 });
                 Pose {
                     rotation,

@@ -23,8 +23,8 @@
 //! Buffers live in a [`Solver`] that callers keep between queries; the node
 //! loop itself allocates nothing once they have grown.
 
-use crate::enclosure::{Arithmetic, Enclosure, Interval, TimeSpan};
 use crate::enclosure::{Affine, Taylor2, Taylor3};
+use crate::enclosure::{Arithmetic, Enclosure, Interval, TimeSpan};
 use crate::error::CcdError;
 
 /// The most axes one pair may have (a bit mask of `u64` tracks them).
@@ -174,6 +174,12 @@ struct Alive {
 /// shrink is not worth an evaluation of its own.
 const RECLIP_SHARE: f64 = 0.6;
 
+/// A node at most `ε` wide whose pairs cannot be seen touching at its end
+/// is split further, down to this share of `ε`: past it the pair only
+/// grazes (its gap stays within rounding of zero) and the node's start is
+/// reported.
+const FLOOR_SHARE: f64 = 1.0 / 64.0;
+
 /// Reusable buffers for searches; keep one per thread and call
 /// [`Solver::solve`] as often as needed.
 #[derive(Debug, Default)]
@@ -241,13 +247,20 @@ impl Solver {
                 continue; // every pair apart on this node
             };
             let clipped = node.span;
-            if clipped.width() <= options.epsilon {
-                return Ok(SolveOutcome {
-                    status: RootStatus::Hit,
-                    time: clipped.lo,
-                    pair: Some(node.earliest_pair),
-                    stats,
-                });
+            // Report only a node that was itself evaluated at width ≤ ε, and
+            // only once some pair is seen touching by its end (so the true
+            // time is within ε after the report) or the node reached the
+            // floor width (a near-touch that never quite closes).
+            if frame.span.width() <= options.epsilon {
+                let floor = frame.span.width() <= options.epsilon * FLOOR_SHARE;
+                if floor || self.touching_at(gaps, clipped.hi, &node, &mut stats) {
+                    return Ok(SolveOutcome {
+                        status: RootStatus::Hit,
+                        time: clipped.lo,
+                        pair: Some(node.earliest_pair),
+                        stats,
+                    });
+                }
             }
             let (start, end) = (node.start, node.end);
             if clipped.width() < RECLIP_SHARE * frame.span.width() {
@@ -285,6 +298,32 @@ impl Solver {
             pair: None,
             stats,
         })
+    }
+
+    /// True when some surviving pair of `node` has every alive axis `≤ 0`
+    /// (upper bounds) at the single time `t`: the pair touches by then.
+    fn touching_at<E: Enclosure, G: GapSet<E>>(
+        &mut self,
+        gaps: &mut G,
+        t: f64,
+        node: &Visited,
+        stats: &mut SolveStats,
+    ) -> bool {
+        let span = TimeSpan::new(t, t);
+        let mut out = [E::zero(); MAX_AXES];
+        gaps.begin_node(span);
+        for alive in &self.arena[node.start..node.end] {
+            gaps.eval(alive.pair as usize, span, alive.axes, &mut out);
+            stats.pair_evaluations += 1;
+            stats.axis_evaluations += u64::from(alive.axes.count_ones());
+            let touching = (0..MAX_AXES)
+                .filter(|k| alive.axes >> k & 1 == 1)
+                .all(|k| out[k].range().hi <= 0.0);
+            if touching {
+                return true;
+            }
+        }
+        false
     }
 
     /// The first pair in `arena[start..end]` that may touch on `span`

@@ -146,7 +146,12 @@ pub(crate) fn recip<E: Enclosure>(x: E) -> Result<E, CcdError> {
 /// The polynomial `Σ coefs[k]·eᵏ ± r` of node `from`, re-expressed in the
 /// local symbol of its sub-node `to`, by Horner's rule in `E` itself:
 /// `e = (τ − m)/h` with `τ` the time over `to`.
-pub(crate) fn restrict_poly<E: Enclosure>(coefs: &[f64], r: f64, from: TimeSpan, to: TimeSpan) -> E {
+pub(crate) fn restrict_poly<E: Enclosure>(
+    coefs: &[f64],
+    r: f64,
+    from: TimeSpan,
+    to: TimeSpan,
+) -> E {
     let (m, h) = from.center_radius();
     let Ok(inv_h) = Interval::point(h).recip() else {
         // A point node: the function is one (uncertain) value.

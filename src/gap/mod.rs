@@ -1,0 +1,110 @@
+//! Distance functions ("gaps"), one family of shape pairs per file.
+//!
+//! A pair's gap is a list of *axis* functions of time. Each is written once,
+//! generically over the [`Enclosure`] arithmetic, from the two shapes'
+//! enclosed poses on a node, and is built so that **an axis `> 0` proves
+//! the shapes farther apart than the skin** at every time of the node. The
+//! pair may touch only where every axis is `≤ 0` (separating axes compose as
+//! AND, DESIGN.md §3). Skins are baked into the axes at construction, in
+//! each axis's own units.
+//!
+//! | pair | family | file |
+//! |---|---|---|
+//! | ball–ball | squared centre distance | `ball_ball.rs` |
+
+mod ball_ball;
+
+pub(crate) use ball_ball::BallBall;
+
+use crate::enclosure::{Enclosure, TimeSpan};
+use crate::error::{CcdError, check_finite};
+use crate::motion::{Motion, Pose};
+use rapier3d::parry::shape::{Shape, TypedShape};
+
+/// One shape of a pair as an axis function sees it on a node.
+pub(crate) struct Side<'p, E: Enclosure> {
+    /// The shape frame's pose over the node.
+    pub pose: &'p Pose<E>,
+    /// The frame's whole motion (for adaptive choices at the node's middle).
+    #[allow(dead_code)] // read by the adaptive-axis families
+    pub motion: &'p Motion,
+}
+
+/// The gap of one shape pair: its family and the family's parameters.
+#[derive(Clone, Debug)]
+pub(crate) enum PairGap {
+    BallBall(BallBall),
+}
+
+impl PairGap {
+    /// How many axis functions the pair has.
+    pub fn axis_count(&self) -> usize {
+        match self {
+            PairGap::BallBall(_) => BallBall::AXES,
+        }
+    }
+
+    /// Enclose the axes set in `axes` over `span` into `out`.
+    pub fn eval<E: Enclosure>(
+        &self,
+        span: TimeSpan,
+        a: &Side<E>,
+        b: &Side<E>,
+        axes: u64,
+        out: &mut [E],
+    ) {
+        match self {
+            PairGap::BallBall(g) => g.eval(span, a, b, axes, out),
+        }
+    }
+}
+
+/// A pair gap together with whether the family holds the shapes in the
+/// opposite order (its `a` side is the caller's second shape).
+pub(crate) struct Built {
+    pub gap: PairGap,
+    pub swapped: bool,
+}
+
+/// The gap for `shape1` against `shape2` with the given skin (metres), or
+/// `Unsupported` for a pair of kinds no family handles.
+pub(crate) fn build(shape1: &dyn Shape, shape2: &dyn Shape, skin: f64) -> Result<Built, CcdError> {
+    use TypedShape as T;
+    let straight = |gap| {
+        Ok(Built {
+            gap,
+            swapped: false,
+        })
+    };
+    match (shape1.as_typed_shape(), shape2.as_typed_shape()) {
+        (T::Ball(b1), T::Ball(b2)) => straight(PairGap::BallBall(BallBall::new(
+            radius(b1.radius)?,
+            radius(b2.radius)?,
+            skin,
+        ))),
+        _ => Err(CcdError::Unsupported {
+            what: format!(
+                "{:?} against {:?}",
+                shape1.shape_type(),
+                shape2.shape_type()
+            ),
+        }),
+    }
+}
+
+/// A length of a shape (radius, half-extent) checked finite and `≥ 0`.
+pub(crate) fn length(what: &'static str, x: f32) -> Result<f64, CcdError> {
+    let x = check_finite(what, f64::from(x))?;
+    if x < 0.0 {
+        return Err(CcdError::BadParameter {
+            what,
+            value: x,
+            expected: "a length >= 0 metres",
+        });
+    }
+    Ok(x)
+}
+
+fn radius(r: f32) -> Result<f64, CcdError> {
+    length("ball radius", r)
+}

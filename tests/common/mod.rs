@@ -1,0 +1,62 @@
+//! Shared helpers for the integration tests: a seeded random generator and
+//! small statistics. (A dozen lines; not worth a dependency.)
+#![allow(dead_code)]
+
+/// SplitMix64: tiny, seeded, good enough to spread test cases.
+pub struct Rng(u64);
+
+impl Rng {
+    pub fn new(seed: u64) -> Rng {
+        Rng(seed)
+    }
+
+    pub fn next_u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+
+    /// Uniform in `[lo, hi)`.
+    pub fn range(&mut self, lo: f64, hi: f64) -> f64 {
+        let unit = (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64;
+        lo + (hi - lo) * unit
+    }
+
+    /// A vector with each coordinate uniform in `[-r, r)`.
+    pub fn vector(&mut self, r: f64) -> nalgebra::Vector3<f64> {
+        nalgebra::Vector3::new(self.range(-r, r), self.range(-r, r), self.range(-r, r))
+    }
+
+    /// A uniformly random unit quaternion.
+    pub fn rotation(&mut self) -> nalgebra::UnitQuaternion<f64> {
+        loop {
+            let q = nalgebra::Quaternion::new(
+                self.range(-1.0, 1.0),
+                self.range(-1.0, 1.0),
+                self.range(-1.0, 1.0),
+                self.range(-1.0, 1.0),
+            );
+            let n = q.norm();
+            if n > 0.1 && n <= 1.0 {
+                return nalgebra::UnitQuaternion::new_normalize(q);
+            }
+        }
+    }
+
+    pub fn below(&mut self, n: usize) -> usize {
+        (self.next_u64() % n as u64) as usize
+    }
+}
+
+/// The `q`-quantile (0..=1) of the values (sorted copy).
+pub fn quantile(values: &[f64], q: f64) -> f64 {
+    if values.is_empty() {
+        return f64::NAN;
+    }
+    let mut v = values.to_vec();
+    v.sort_by(|a, b| a.total_cmp(b));
+    let i = ((v.len() - 1) as f64 * q).round() as usize;
+    v[i]
+}

@@ -1,0 +1,179 @@
+//! Motion: enclosures contain the exact pose, constructors reproduce their
+//! inputs, and terms a body does not have cost nothing.
+
+mod common;
+
+use affine_ccd::{
+    Affine, Enclosure, Interval, Motion, Pose, Taylor2, Taylor3, TimeSpan, Trajectory,
+};
+use common::Rng;
+use nalgebra::{Isometry3, Point3, Translation3, Vector3};
+
+const DT: f64 = 1.0 / 60.0;
+
+fn random_motion(rng: &mut Rng, spin: f64) -> Motion {
+    let com = rng.vector(5.0);
+    let start = Isometry3::from_parts(Translation3::from(com + rng.vector(1.0)), rng.rotation());
+    Motion::from_velocities(
+        start,
+        Point3::from(com),
+        rng.vector(100.0),
+        rng.vector(spin),
+        DT,
+    )
+    .unwrap()
+    .with_acceleration(rng.vector(20.0))
+    .unwrap()
+}
+
+/// Every entry of the enclosed pose over `span` contains the exact pose at
+/// sampled times of the span.
+fn encloses<E: Enclosure>(motion: &Motion, span: TimeSpan) -> Result<(), String> {
+    let pose: Pose<E> = motion.pose(span);
+    for k in 0..=16 {
+        let t = span.lo + span.width() * k as f64 / 16.0;
+        let exact = motion.pose_at(t);
+        let r = exact.rotation.to_rotation_matrix();
+        for i in 0..3 {
+            let range = pose.translation[i].range();
+            let x = exact.translation.vector[i];
+            // Ground truth is itself f64: allow its rounding.
+            let tol = 1e-12 * (1.0 + x.abs());
+            if !(range.lo - tol <= x && x <= range.hi + tol) {
+                return Err(format!(
+                    "{:?} t={t}: translation[{i}] {x} not in {range:?}",
+                    E::KIND
+                ));
+            }
+            for j in 0..3 {
+                let range = pose.rotation[(i, j)].range();
+                let x = r[(i, j)];
+                if !(range.lo - 1e-12 <= x && x <= range.hi + 1e-12) {
+                    return Err(format!(
+                        "{:?} t={t}: R[{i}{j}] {x} not in {range:?}",
+                        E::KIND
+                    ));
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+#[test]
+fn enclosed_poses_contain_the_exact_motion() {
+    let mut rng = Rng::new(5);
+    for case in 0..400 {
+        // Up to 1000 rad/s: 16 rad, more than two turns, in one step.
+        let spin = [0.0, 10.0, 300.0, 1000.0][case % 4];
+        let motion = random_motion(&mut rng, spin);
+        let lo = rng.range(0.0, 1.0);
+        let width = [1.0, 0.1, 1e-3, 1e-6][rng.below(4)];
+        let span = TimeSpan::new(lo * (1.0 - width), lo * (1.0 - width) + width);
+        for result in [
+            encloses::<Interval>(&motion, span),
+            encloses::<Affine>(&motion, span),
+            encloses::<Taylor2>(&motion, span),
+            encloses::<Taylor3>(&motion, span),
+        ] {
+            result.unwrap_or_else(|e| panic!("case {case} spin {spin}: {e}"));
+        }
+    }
+}
+
+#[test]
+fn narrow_nodes_give_narrow_poses() {
+    // Soundness alone would allow [−∞, ∞]: check the enclosures are useful.
+    let mut rng = Rng::new(9);
+    let motion = random_motion(&mut rng, 50.0);
+    let pose: Pose<Affine> = motion.pose(TimeSpan::new(0.5, 0.5 + 1e-3));
+    for i in 0..3 {
+        let w = pose.translation[i].range().width();
+        assert!(w < 0.01, "translation[{i}] width {w} over a 1e-3 node");
+        for j in 0..3 {
+            let w = pose.rotation[(i, j)].range().width();
+            assert!(w < 1e-3, "R[{i}{j}] width {w} over a 1e-3 node");
+        }
+    }
+}
+
+#[test]
+fn from_poses_reproduces_both_poses_with_whole_turns() {
+    let mut rng = Rng::new(21);
+    for case in 0..300 {
+        let start = Isometry3::from_parts(Translation3::from(rng.vector(10.0)), rng.rotation());
+        // Angular velocities up to 1000 rad/s: the end pose alone cannot say
+        // how many whole turns were made; the hint does.
+        let w = rng.vector(1000.0);
+        let local_com = Point3::from(rng.vector(0.5));
+        let truth =
+            Motion::from_velocities(start, start * local_com, rng.vector(50.0), w, DT).unwrap();
+        let end = truth.pose_at(1.0);
+        let motion = Motion::from_poses(start, end, local_com, DT, w).unwrap();
+        for (t, expected) in [(0.0, start), (1.0, end)] {
+            let got = motion.pose_at(t);
+            let dp = (got.translation.vector - expected.translation.vector).norm();
+            let dr = got.rotation.angle_to(&expected.rotation);
+            assert!(
+                dp < 1e-9 && dr < 1e-9,
+                "case {case} t={t}: off by {dp} m, {dr} rad"
+            );
+        }
+        // Same turns as the true motion: the middle matches too.
+        let (a, b) = (motion.pose_at(0.5), truth.pose_at(0.5));
+        let dr = a.rotation.angle_to(&b.rotation);
+        assert!(
+            dr < 1e-6,
+            "case {case}: middle off by {dr} rad (whole turns lost)"
+        );
+    }
+}
+
+#[test]
+fn absent_terms_cost_nothing() {
+    // No angular velocity: the rotation is the exact constant start matrix.
+    let start = Isometry3::from_parts(
+        Translation3::new(1.0, 2.0, 3.0),
+        nalgebra::UnitQuaternion::from_euler_angles(0.1, 0.2, 0.3),
+    );
+    let m = Motion::from_velocities(
+        start,
+        Point3::new(1.0, 2.0, 3.0),
+        Vector3::new(1.0, 0.0, 0.0),
+        Vector3::zeros(),
+        DT,
+    )
+    .unwrap();
+    let pose: Pose<Affine> = m.pose(TimeSpan::STEP);
+    for e in pose.rotation.iter() {
+        assert_eq!(e.r, 0.0, "constant rotation entry carries error {e:?}");
+        assert_eq!(e.s, 0.0);
+    }
+    // No acceleration: translation is exactly linear (slope only).
+    assert!(pose.translation.x.r < 1e-15, "{:?}", pose.translation.x);
+}
+
+#[test]
+fn bad_motion_input_is_a_typed_error() {
+    let start = Isometry3::identity();
+    let o = Point3::origin();
+    let z = Vector3::zeros();
+    assert!(Motion::from_velocities(start, o, Vector3::new(f64::NAN, 0.0, 0.0), z, DT).is_err());
+    assert!(
+        Motion::from_velocities(start, o, z, Vector3::new(0.0, f64::INFINITY, 0.0), DT).is_err()
+    );
+    assert!(Motion::from_velocities(start, o, z, z, -1.0).is_err());
+    assert!(Motion::from_velocities(start, o, z, z, f64::NAN).is_err());
+    assert!(Motion::from_poses(start, start, o, 0.0, z).is_err());
+    let m = Motion::from_velocities(start, o, z, z, DT).unwrap();
+    assert!(
+        m.with_acceleration(Vector3::new(f64::NAN, 0.0, 0.0))
+            .is_err()
+    );
+    // 1e300 m/s times dt is finite, its square is not: still no panic.
+    let huge = Motion::from_velocities(start, o, Vector3::new(1e300, 0.0, 0.0), z, DT);
+    if let Ok(m) = huge {
+        let pose: Pose<Affine> = m.pose(TimeSpan::STEP);
+        let _ = pose.translation.x.range();
+    }
+}
