@@ -28,12 +28,23 @@ fn expand<E: Enclosure>(x: E, x0: f64, coefs: &[Interval], rem: Interval) -> E {
     acc.widen(tail.hi)
 }
 
-/// Of two enclosures of the same value, the one with the narrower range.
-fn narrower<E: Enclosure>(a: E, b: E) -> E {
-    if a.range().width() <= b.range().width() {
-        a
+/// Of two enclosures of the same value, the `series` unless its range is more
+/// than twice as wide as the time-independent `fallback`'s.
+///
+/// This used to keep whichever range was narrower. For a monotone function
+/// of a narrow argument the fallback (the interval of the exact range, up to
+/// rounding) is never wider than the series, so the series was always dropped
+/// and with it the value's dependence on the time symbol: in
+/// `sin(3τ+1)·τ² − √(τ+2) + 1/(τ+1.5)` nothing cancelled any more and affine
+/// and Taylor arithmetic fell to first order, like intervals (caught by the
+/// convergence test in `tests/enclosure.rs`). The series' excess width
+/// shrinks with the node, so any factor above 1 keeps it on small nodes; 2
+/// still falls back where the series says little (a range near a pole).
+fn prefer_series<E: Enclosure>(series: E, fallback: E) -> E {
+    if series.range().width() <= 2.0 * fallback.range().width() {
+        series
     } else {
-        b
+        fallback
     }
 }
 
@@ -54,7 +65,8 @@ fn half_binomial_ratio(k: usize) -> Interval {
 }
 
 /// sin or cos (`cosine = true`) of any enclosure: the series about the
-/// range's midpoint, or `[−1, 1]` information alone when that is narrower.
+/// range's midpoint, or `[−1, 1]` information alone when that is much
+/// narrower (see [`prefer_series`]).
 pub(crate) fn trig<E: Enclosure>(x: E, cosine: bool) -> E {
     let range = x.range();
     if !range.is_bounded() || range.width() > 8.0 {
@@ -81,7 +93,7 @@ pub(crate) fn trig<E: Enclosure>(x: E, cosine: bool) -> E {
     let clamp = series.range();
     if clamp.lo < -1.0 || clamp.hi > 1.0 {
         let bounded = Interval::new(clamp.lo.max(-1.0), clamp.hi.min(1.0));
-        narrower(series, E::from_interval(bounded))
+        prefer_series(series, E::from_interval(bounded))
     } else {
         series
     }
@@ -114,7 +126,7 @@ pub(crate) fn sqrt<E: Enclosure>(x: E) -> Result<E, CcdError> {
     }
     let rem = (binom * rem).abs();
     let series = expand(x, x0, &coefs[..=n], rem);
-    Ok(narrower(series, E::from_interval(whole)))
+    Ok(prefer_series(series, E::from_interval(whole)))
 }
 
 /// `1/x`; a range holding zero is a `Domain` error.
@@ -140,7 +152,7 @@ pub(crate) fn recip<E: Enclosure>(x: E) -> Result<E, CcdError> {
         rem = rem * nearest;
     }
     let series = expand(x, x0, &coefs[..=n], rem);
-    Ok(narrower(series, E::from_interval(whole)))
+    Ok(prefer_series(series, E::from_interval(whole)))
 }
 
 /// The polynomial `Σ coefs[k]·eᵏ ± r` of node `from`, re-expressed in the
