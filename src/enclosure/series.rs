@@ -9,6 +9,7 @@
 //! arithmetic's degree: higher terms would be folded into the error term by
 //! the multiplications anyway.
 
+use super::rounding::add_up;
 use super::{Enclosure, Interval, TimeSpan};
 use crate::CcdError;
 
@@ -158,12 +159,26 @@ pub(crate) fn recip<E: Enclosure>(x: E) -> Result<E, CcdError> {
 /// The polynomial `Σ coefs[k]·eᵏ ± r` of node `from`, re-expressed in the
 /// local symbol of its sub-node `to`, by Horner's rule in `E` itself:
 /// `e = (τ − m)/h` with `τ` the time over `to`.
-pub(crate) fn restrict_poly<E: Enclosure>(coefs: &[f64], r: f64, from: TimeSpan, to: TimeSpan) -> E {
+pub(crate) fn restrict_poly<E: Enclosure>(
+    coefs: &[f64],
+    r: f64,
+    from: TimeSpan,
+    to: TimeSpan,
+) -> E {
     let (m, h) = from.center_radius();
-    let Ok(inv_h) = Interval::point(h).recip() else {
-        // A point node: the function is one (uncertain) value.
-        let mag: f64 = coefs.iter().map(|c| c.abs()).sum();
-        return E::from_interval(Interval::around(coefs[0], mag + r));
+    // `center_radius` rounds `h` up, so even a point node has `h > 0` (the
+    // smallest subnormal) and `1/h` overflows to infinity: that used to give
+    // the whole line for every restriction of a point node (caught by the
+    // restrict property in `tests/enclosure.rs`). Any `h` whose reciprocal is
+    // not finite takes the point-node branch.
+    let inv_h = match Interval::point(h).recip() {
+        Ok(inv_h) if inv_h.is_bounded() => inv_h,
+        _ => {
+            // A point node: the function is one (uncertain) value,
+            // `c0 ± (Σ_{k≥1} |c_k| + r)` for every `e ∈ [−1, 1]`.
+            let mag = coefs[1..].iter().fold(r, |m, c| add_up(m, c.abs()));
+            return E::from_interval(Interval::around(coefs[0], mag));
+        }
     };
     let e = (E::time(to) - m).scale(inv_h);
     let n = coefs.len() - 1;
