@@ -78,7 +78,10 @@ impl Mul for Affine {
             add_up(add_up(err(p01), err(p10)), err(s)),
         );
         let cross = add_up(
-            add_up(mul_up(self.linear_mag(), o.r), mul_up(o.linear_mag(), self.r)),
+            add_up(
+                mul_up(self.linear_mag(), o.r),
+                mul_up(o.linear_mag(), self.r),
+            ),
             mul_up(self.r, o.r),
         );
         let r = add_up(add_up(half11.abs(), cross), rounding);
@@ -175,10 +178,7 @@ impl Enclosure for Affine {
 
     fn range(&self) -> Interval {
         let s = self.s.abs();
-        Interval::new(
-            down(down(self.c - s) - self.r),
-            up(up(self.c + s) + self.r),
-        )
+        Interval::new(down(down(self.c - s) - self.r), up(up(self.c + s) + self.r))
     }
 
     fn linear_lower(&self) -> (f64, f64) {

@@ -24,7 +24,7 @@ fn expand<E: Enclosure>(x: E, x0: f64, coefs: &[Interval], rem: Interval) -> E {
     let dmax = Interval::point(delta.range().mag());
     let mut tail = rem;
     for _ in 0..=n {
-        tail = tail * dmax;
+        tail *= dmax;
     }
     acc.widen(tail.hi)
 }
@@ -122,8 +122,8 @@ pub(crate) fn sqrt<E: Enclosure>(x: E) -> Result<E, CcdError> {
     let mut binom = Interval::point(1.0);
     let inv_a = Interval::point(range.lo).recip()?;
     for k in 1..=n + 1 {
-        binom = binom * half_binomial_ratio(k);
-        rem = rem * inv_a;
+        binom *= half_binomial_ratio(k);
+        rem *= inv_a;
     }
     let rem = (binom * rem).abs();
     let series = expand(x, x0, &coefs[..=n], rem);
@@ -150,7 +150,7 @@ pub(crate) fn recip<E: Enclosure>(x: E) -> Result<E, CcdError> {
     let nearest = Interval::point(range.lo.abs().min(range.hi.abs())).recip()?;
     let mut rem = Interval::point(1.0);
     for _ in 0..n + 2 {
-        rem = rem * nearest;
+        rem *= nearest;
     }
     let series = expand(x, x0, &coefs[..=n], rem);
     Ok(prefer_series(series, E::from_interval(whole)))

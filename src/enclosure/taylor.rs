@@ -173,9 +173,9 @@ impl<const K: usize> Add for Taylor<K> {
     fn add(self, o: Taylor<K>) -> Taylor<K> {
         let mut c = [0.0; K];
         let mut r = add_up(self.r, o.r);
-        for k in 0..K {
-            c[k] = self.c[k] + o.c[k];
-            r = add_up(r, err(c[k]));
+        for (k, ck) in c.iter_mut().enumerate() {
+            *ck = self.c[k] + o.c[k];
+            r = add_up(r, err(*ck));
         }
         Taylor::checked(c, r)
     }
