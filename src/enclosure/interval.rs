@@ -122,24 +122,29 @@ impl Neg for Interval {
     }
 }
 
+// The scalar operators take the scalar through `Enclosure::constant`, like
+// `Affine` and `Taylor` do, so that a non-finite scalar means "unknown" (the
+// whole line). With `Interval::point`, `τ + ∞` was `[f64::MAX, ∞]`, a range a
+// caller would read as "far apart" (caught by the non-finite test in
+// `tests/enclosure.rs`).
 impl Add<f64> for Interval {
     type Output = Interval;
     fn add(self, c: f64) -> Interval {
-        self + Interval::point(c)
+        self + <Interval as Enclosure>::constant(c)
     }
 }
 
 impl Sub<f64> for Interval {
     type Output = Interval;
     fn sub(self, c: f64) -> Interval {
-        self - Interval::point(c)
+        self - <Interval as Enclosure>::constant(c)
     }
 }
 
 impl Mul<f64> for Interval {
     type Output = Interval;
     fn mul(self, c: f64) -> Interval {
-        self * Interval::point(c)
+        self * <Interval as Enclosure>::constant(c)
     }
 }
 

@@ -9,6 +9,7 @@
 //! arithmetic's degree: higher terms would be folded into the error term by
 //! the multiplications anyway.
 
+use super::rounding::add_up;
 use super::{Enclosure, Interval, TimeSpan};
 use crate::CcdError;
 
@@ -23,17 +24,28 @@ fn expand<E: Enclosure>(x: E, x0: f64, coefs: &[Interval], rem: Interval) -> E {
     let dmax = Interval::point(delta.range().mag());
     let mut tail = rem;
     for _ in 0..=n {
-        tail = tail * dmax;
+        tail *= dmax;
     }
     acc.widen(tail.hi)
 }
 
-/// Of two enclosures of the same value, the one with the narrower range.
-fn narrower<E: Enclosure>(a: E, b: E) -> E {
-    if a.range().width() <= b.range().width() {
-        a
+/// Of two enclosures of the same value, the `series` unless its range is more
+/// than twice as wide as the time-independent `fallback`'s.
+///
+/// This used to keep whichever range was narrower. For a monotone function
+/// of a narrow argument the fallback (the interval of the exact range, up to
+/// rounding) is never wider than the series, so the series was always dropped
+/// and with it the value's dependence on the time symbol: in
+/// `sin(3τ+1)·τ² − √(τ+2) + 1/(τ+1.5)` nothing cancelled any more and affine
+/// and Taylor arithmetic fell to first order, like intervals (caught by the
+/// convergence test in `tests/enclosure.rs`). The series' excess width
+/// shrinks with the node, so any factor above 1 keeps it on small nodes; 2
+/// still falls back where the series says little (a range near a pole).
+fn prefer_series<E: Enclosure>(series: E, fallback: E) -> E {
+    if series.range().width() <= 2.0 * fallback.range().width() {
+        series
     } else {
-        b
+        fallback
     }
 }
 
@@ -54,7 +66,8 @@ fn half_binomial_ratio(k: usize) -> Interval {
 }
 
 /// sin or cos (`cosine = true`) of any enclosure: the series about the
-/// range's midpoint, or `[−1, 1]` information alone when that is narrower.
+/// range's midpoint, or `[−1, 1]` information alone when that is much
+/// narrower (see [`prefer_series`]).
 pub(crate) fn trig<E: Enclosure>(x: E, cosine: bool) -> E {
     let range = x.range();
     if !range.is_bounded() || range.width() > 8.0 {
@@ -81,7 +94,7 @@ pub(crate) fn trig<E: Enclosure>(x: E, cosine: bool) -> E {
     let clamp = series.range();
     if clamp.lo < -1.0 || clamp.hi > 1.0 {
         let bounded = Interval::new(clamp.lo.max(-1.0), clamp.hi.min(1.0));
-        narrower(series, E::from_interval(bounded))
+        prefer_series(series, E::from_interval(bounded))
     } else {
         series
     }
@@ -109,12 +122,12 @@ pub(crate) fn sqrt<E: Enclosure>(x: E) -> Result<E, CcdError> {
     let mut binom = Interval::point(1.0);
     let inv_a = Interval::point(range.lo).recip()?;
     for k in 1..=n + 1 {
-        binom = binom * half_binomial_ratio(k);
-        rem = rem * inv_a;
+        binom *= half_binomial_ratio(k);
+        rem *= inv_a;
     }
     let rem = (binom * rem).abs();
     let series = expand(x, x0, &coefs[..=n], rem);
-    Ok(narrower(series, E::from_interval(whole)))
+    Ok(prefer_series(series, E::from_interval(whole)))
 }
 
 /// `1/x`; a range holding zero is a `Domain` error.
@@ -137,10 +150,10 @@ pub(crate) fn recip<E: Enclosure>(x: E) -> Result<E, CcdError> {
     let nearest = Interval::point(range.lo.abs().min(range.hi.abs())).recip()?;
     let mut rem = Interval::point(1.0);
     for _ in 0..n + 2 {
-        rem = rem * nearest;
+        rem *= nearest;
     }
     let series = expand(x, x0, &coefs[..=n], rem);
-    Ok(narrower(series, E::from_interval(whole)))
+    Ok(prefer_series(series, E::from_interval(whole)))
 }
 
 /// The polynomial `Σ coefs[k]·eᵏ ± r` of node `from`, re-expressed in the
@@ -153,10 +166,19 @@ pub(crate) fn restrict_poly<E: Enclosure>(
     to: TimeSpan,
 ) -> E {
     let (m, h) = from.center_radius();
-    let Ok(inv_h) = Interval::point(h).recip() else {
-        // A point node: the function is one (uncertain) value.
-        let mag: f64 = coefs.iter().map(|c| c.abs()).sum();
-        return E::from_interval(Interval::around(coefs[0], mag + r));
+    // `center_radius` rounds `h` up, so even a point node has `h > 0` (the
+    // smallest subnormal) and `1/h` overflows to infinity: that used to give
+    // the whole line for every restriction of a point node (caught by the
+    // restrict property in `tests/enclosure.rs`). Any `h` whose reciprocal is
+    // not finite takes the point-node branch.
+    let inv_h = match Interval::point(h).recip() {
+        Ok(inv_h) if inv_h.is_bounded() => inv_h,
+        _ => {
+            // A point node: the function is one (uncertain) value,
+            // `c0 ± (Σ_{k≥1} |c_k| + r)` for every `e ∈ [−1, 1]`.
+            let mag = coefs[1..].iter().fold(r, |m, c| add_up(m, c.abs()));
+            return E::from_interval(Interval::around(coefs[0], mag));
+        }
     };
     let e = (E::time(to) - m).scale(inv_h);
     let n = coefs.len() - 1;

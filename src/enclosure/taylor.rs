@@ -78,6 +78,94 @@ impl<const K: usize> Taylor<K> {
         }
         acc
     }
+
+    /// `c0 + Σ_{k≥1} bounds(c[k]·eᵏ)`: each term bounded on its own.
+    fn term_range(&self) -> Interval {
+        let (mut lo, mut hi) = (self.c[0], self.c[0]);
+        for k in 1..K {
+            let (a, b) = Self::term_bounds(k, self.c[k]);
+            lo = down(lo + a);
+            hi = up(hi + b);
+        }
+        Interval::new(lo, hi)
+    }
+
+    /// The polynomial part's range on `[−1, 1]` when it may turn there.
+    ///
+    /// Bounding each term on its own (`term_range`) overestimates by about
+    /// `|c1| + |c2|`, which on a node holding a critical point of the function
+    /// (a grazing contact) is of the order of the true width: Taylor models
+    /// then converged no faster than affine forms there (order 2; caught by
+    /// the convergence test in `tests/enclosure.rs`). For degree ≤ 3 the
+    /// range is instead the hull of the values at the ends and over rigorous
+    /// enclosures of the critical points (roots of `p′`, by the quadratic
+    /// formula in interval arithmetic), exact up to rounding. Higher degrees
+    /// keep the per-term bound.
+    fn turning_range(&self) -> Interval {
+        if K > 4 {
+            return self.term_range();
+        }
+        let mut a = [0.0; 4];
+        a[..K].copy_from_slice(&self.c);
+        let mut range = self.at_end(-1.0).hull(self.at_end(1.0));
+        for root in critical_points(a).into_iter().flatten() {
+            let (lo, hi) = (root.lo.max(-1.0), root.hi.min(1.0));
+            if lo <= hi {
+                range = range.hull(cubic_over(a, Interval::new(lo, hi)));
+            }
+        }
+        range
+    }
+}
+
+/// `Σ a[k]·xᵏ` over the interval `x`, by Horner's rule.
+fn horner(a: &[Interval], x: Interval) -> Interval {
+    let mut acc = a[a.len() - 1];
+    for &coef in a[..a.len() - 1].iter().rev() {
+        acc = acc * x + coef;
+    }
+    acc
+}
+
+/// The cubic `Σ a[k]·eᵏ` over the (narrow) interval `x`, by the mean-value
+/// form `p(mid) + p′(x)·(x − mid)`: near a critical point `p′` is small, so
+/// the bound is far tighter than Horner's rule over `x`.
+fn cubic_over(a: [f64; 4], x: Interval) -> Interval {
+    let p = a.map(Interval::point);
+    let mid = x.mid();
+    let dp = [p[1], p[2] * 2.0, p[3] * 3.0];
+    horner(&p, Interval::point(mid)) + horner(&dp, x) * (x - mid)
+}
+
+/// Enclosures of the real roots of `p′(e) = a1 + 2·a2·e + 3·a3·e²`, the
+/// critical points of the cubic `Σ a[k]·eᵏ`. A root may be missing only if
+/// it does not exist; an enclosure may be wide (even the whole line).
+fn critical_points(a: [f64; 4]) -> [Option<Interval>; 2] {
+    let div = |x: Interval, y: Interval| y.recip().ok().map(|inv| x * inv);
+    let (a1, a2, a3) = (
+        Interval::point(a[1]),
+        Interval::point(a[2]),
+        Interval::point(a[3]),
+    );
+    if a[3] == 0.0 {
+        // Linear p′: one root −a1/(2·a2), none when p′ is constant.
+        return [div(-a1, a2 * 2.0), None];
+    }
+    // Roots of 3a3·e² + 2a2·e + a1: with D = a2² − 3·a1·a3,
+    // e = (−a2 ± √D)/(3a3), in the stable form q = −(a2 + sign(a2)·√D),
+    // e1 = q/(3a3), e2 = a1/q.
+    let disc = a2.sqr() - a1 * a3 * 3.0;
+    let Ok(root_disc) = disc.sqrt() else {
+        // D < 0: no real critical point, p is monotone.
+        return [None, None];
+    };
+    let signed = if a[2] < 0.0 { -root_disc } else { root_disc };
+    let q = -(a2 + signed);
+    let three_a3 = a3 * 3.0;
+    let e1 = div(q, three_a3);
+    // If q may be zero, take the second root from the plain formula.
+    let e2 = div(a1, q).or_else(|| div(-a2 - signed, three_a3));
+    [e1, e2]
 }
 
 impl<const K: usize> Add for Taylor<K> {
@@ -85,9 +173,9 @@ impl<const K: usize> Add for Taylor<K> {
     fn add(self, o: Taylor<K>) -> Taylor<K> {
         let mut c = [0.0; K];
         let mut r = add_up(self.r, o.r);
-        for k in 0..K {
-            c[k] = self.c[k] + o.c[k];
-            r = add_up(r, err(c[k]));
+        for (k, ck) in c.iter_mut().enumerate() {
+            *ck = self.c[k] + o.c[k];
+            r = add_up(r, err(*ck));
         }
         Taylor::checked(c, r)
     }
@@ -241,13 +329,9 @@ impl<const K: usize> Enclosure for Taylor<K> {
             // Exact up to rounding: the values at the two ends.
             self.at_end(-1.0).hull(self.at_end(1.0))
         } else {
-            let (mut lo, mut hi) = (self.c[0], self.c[0]);
-            for k in 1..K {
-                let (a, b) = Self::term_bounds(k, self.c[k]);
-                lo = down(lo + a);
-                hi = up(hi + b);
-            }
-            Interval::new(lo, hi)
+            // Both bounds are sound; keep their intersection.
+            let (turning, terms) = (self.turning_range(), self.term_range());
+            Interval::new(turning.lo.max(terms.lo), turning.hi.min(terms.hi))
         };
         Interval::new(down(poly.lo - self.r), up(poly.hi + self.r))
     }
