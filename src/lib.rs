@@ -24,4 +24,6 @@ pub use error::CcdError;
 
 pub use motion::{Motion, Pose, Trajectory};
 pub use query::{ManyToi, QueryOptions, ShapeMotion, Toi, time_of_impact, time_of_impact_many};
-pub use solve::{GapSet, RootStatus, SolveOptions, SolveOutcome, SolveStats, Solver, solve_in};
+pub use solve::{
+    GapSet, InitialContact, RootStatus, SolveOptions, SolveOutcome, SolveStats, Solver, solve_in,
+};

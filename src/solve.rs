@@ -67,6 +67,19 @@ pub struct SolveOptions {
     pub max_evaluations: u64,
     /// The part of the step to search, within `[0, 1]`.
     pub span: TimeSpan,
+    /// What to do with pairs that touch at the start of the span.
+    pub initial_contact: InitialContact,
+}
+
+/// What the search does with pairs that already touch when it starts.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum InitialContact {
+    /// Answer `InitiallyTouching` at once.
+    #[default]
+    Report,
+    /// Leave those pairs out and search the others: a physics step hands
+    /// pairs in contact at its start to the contact solver, as rapier does.
+    Ignore,
 }
 
 impl Default for SolveOptions {
@@ -75,6 +88,7 @@ impl Default for SolveOptions {
             epsilon: 1.0e-4,
             max_evaluations: 100_000,
             span: TimeSpan::STEP,
+            initial_contact: InitialContact::Report,
         }
     }
 }
@@ -188,6 +202,8 @@ pub struct Solver {
     arena: Vec<Alive>,
     pending: Vec<Alive>,
     children: Vec<u32>,
+    /// Pairs touching at the start, left out of the search.
+    ignored: Vec<u32>,
 }
 
 impl Solver {
@@ -222,13 +238,15 @@ impl Solver {
             });
         }
         let (start, end) = (0, self.arena.len());
-        // Touching at the very start is its own answer.
+        // Pairs touching at the very start: the answer, or left out.
         let at_start = TimeSpan::new(span.lo, span.lo);
-        if let Some(pair) = self.first_touching(gaps, at_start, start, end, &mut stats) {
+        let ignore = options.initial_contact == InitialContact::Ignore;
+        self.touching_at_start(gaps, at_start, ignore, &mut stats);
+        if !ignore && let Some(&pair) = self.ignored.first() {
             return Ok(SolveOutcome {
                 status: RootStatus::InitiallyTouching,
                 time: span.lo,
-                pair: Some(pair),
+                pair: Some(pair as usize),
                 stats,
             });
         }
@@ -326,37 +344,48 @@ impl Solver {
         false
     }
 
-    /// The first pair in `arena[start..end]` that may touch on `span`
-    /// (used on the point span at the start).
-    fn first_touching<E: Enclosure, G: GapSet<E>>(
+    /// The pairs in `arena[start..end]` (composites followed down to their
+    /// leaves) that may touch at the single time `span`, into
+    /// `self.ignored`, sorted; with `all == false`, stop at the first.
+    fn touching_at_start<E: Enclosure, G: GapSet<E>>(
         &mut self,
         gaps: &mut G,
         span: TimeSpan,
-        start: usize,
-        end: usize,
+        all: bool,
         stats: &mut SolveStats,
-    ) -> Option<usize> {
+    ) {
         let mut out = [E::zero(); MAX_AXES];
         gaps.begin_node(span);
         stats.nodes += 1;
-        let mut queue: Vec<u32> = self.arena[start..end].iter().map(|a| a.pair).collect();
-        while let Some(pair) = queue.pop() {
-            let pair = pair as usize;
-            let axes = full_mask(gaps.axis_count(pair));
-            gaps.eval(pair, span, axes, &mut out);
+        self.ignored.clear();
+        self.pending.clear();
+        self.pending.extend_from_slice(&self.arena);
+        while let Some(item) = self.pending.pop() {
+            let pair = item.pair as usize;
+            gaps.eval(pair, span, item.axes, &mut out);
             stats.pair_evaluations += 1;
-            stats.axis_evaluations += u64::from(axes.count_ones());
-            if (0..MAX_AXES).any(|k| axes >> k & 1 == 1 && out[k].range().lo > 0.0) {
+            stats.axis_evaluations += u64::from(item.axes.count_ones());
+            if (0..MAX_AXES).any(|k| item.axes >> k & 1 == 1 && out[k].range().lo > 0.0) {
                 continue;
             }
             self.children.clear();
             if gaps.expand(pair, span, &mut self.children) {
-                queue.extend_from_slice(&self.children);
+                for &child in &self.children {
+                    let n = gaps.axis_count(child as usize).min(MAX_AXES);
+                    self.pending.push(Alive {
+                        pair: child,
+                        axes: full_mask(n),
+                    });
+                }
                 continue;
             }
-            return Some(pair);
+            self.ignored.push(item.pair);
+            if !all {
+                break;
+            }
         }
-        None
+        self.ignored.sort_unstable();
+        self.ignored.dedup();
     }
 
     /// Evaluate one node: prune, drop axes, clip. `None` when every pair is
@@ -388,6 +417,9 @@ impl Solver {
             } else {
                 break;
             };
+            if self.ignored.binary_search(&item.pair).is_ok() {
+                continue;
+            }
             let pair = item.pair as usize;
             gaps.eval(pair, span, item.axes, &mut out);
             stats.pair_evaluations += 1;

@@ -419,3 +419,29 @@ fn bad_parameters_are_typed_errors() {
     };
     assert!(solve_in(Arithmetic::Affine, &mut Solver::new(), &mut set, &options).is_err());
 }
+
+#[test]
+fn initial_contacts_are_reported_or_left_out() {
+    use affine_ccd::InitialContact;
+    let mut set = PolySet {
+        pairs: vec![
+            // Touching from the start (−0.1 + 0.05τ stays ≤ 0).
+            vec![[-0.1, 0.05, 0.0, 0.0]],
+            // Reaches zero at τ = 0.5.
+            vec![[0.5, -1.0, 0.0, 0.0]],
+        ],
+    };
+    let mut solver = Solver::new();
+    let report = SolveOptions::default();
+    let got = solve_in(Arithmetic::Affine, &mut solver, &mut set, &report).unwrap();
+    assert_eq!(got.status, RootStatus::InitiallyTouching);
+    assert_eq!((got.time, got.pair), (0.0, Some(0)));
+    let ignore = SolveOptions {
+        initial_contact: InitialContact::Ignore,
+        ..SolveOptions::default()
+    };
+    let got = solve_in(Arithmetic::Affine, &mut solver, &mut set, &ignore).unwrap();
+    assert_eq!(got.status, RootStatus::Hit);
+    assert_eq!(got.pair, Some(1));
+    assert!(got.time <= 0.5 && 0.5 - got.time <= ignore.epsilon, "{}", got.time);
+}

@@ -31,7 +31,9 @@ use crate::enclosure::{Affine, Arithmetic, Enclosure, Interval, Taylor2, Taylor3
 use crate::error::{CcdError, check_finite};
 use crate::gap::{self, PairGap, Side};
 use crate::motion::{Motion, Pose, Trajectory};
-use crate::solve::{GapSet, RootStatus, SolveOptions, SolveOutcome, SolveStats, Solver};
+use crate::solve::{
+    GapSet, InitialContact, RootStatus, SolveOptions, SolveOutcome, SolveStats, Solver,
+};
 use nalgebra::{Point3, Vector3};
 use rapier3d::parry::shape::Shape;
 
@@ -50,6 +52,9 @@ pub struct QueryOptions {
     pub max_evaluations: u64,
     /// The part of the step to search, fractions within `[0, 1]`.
     pub time_range: TimeSpan,
+    /// Pairs touching at the start: report them (`InitiallyTouching`) or
+    /// leave them out and search the rest.
+    pub initial_contact: InitialContact,
 }
 
 impl Default for QueryOptions {
@@ -60,6 +65,7 @@ impl Default for QueryOptions {
             arithmetic: Arithmetic::Affine,
             max_evaluations: 100_000,
             time_range: TimeSpan::STEP,
+            initial_contact: InitialContact::Report,
         }
     }
 }
@@ -78,6 +84,7 @@ impl QueryOptions {
             epsilon: self.epsilon,
             max_evaluations: self.max_evaluations,
             span: self.time_range,
+            initial_contact: self.initial_contact,
         };
         options.validate()?;
         Ok(options)
