@@ -443,5 +443,9 @@ fn initial_contacts_are_reported_or_left_out() {
     let got = solve_in(Arithmetic::Affine, &mut solver, &mut set, &ignore).unwrap();
     assert_eq!(got.status, RootStatus::Hit);
     assert_eq!(got.pair, Some(1));
-    assert!(got.time <= 0.5 && 0.5 - got.time <= ignore.epsilon, "{}", got.time);
+    assert!(
+        got.time <= 0.5 && 0.5 - got.time <= ignore.epsilon,
+        "{}",
+        got.time
+    );
 }

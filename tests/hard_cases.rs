@@ -1,0 +1,300 @@
+//! Hard cases with exact answers: grazing at the skin, contact at the ends
+//! of the step, many turns per step, tiny and huge scales, far from the
+//! origin, and determinism. Inputs are f32 values, as rapier gives them.
+
+use affine_ccd::query::{QueryOptions, time_of_impact};
+use affine_ccd::{Arithmetic, Motion, RootStatus, Trajectory};
+use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
+use rapier3d::parry::shape::Ball;
+
+const DT: f64 = 1.0 / 60.0;
+
+/// An f32-exact position, as rapier would hand it over.
+fn p32(x: f64, y: f64, z: f64) -> Vector3<f64> {
+    Vector3::new(x as f32 as f64, y as f32 as f64, z as f32 as f64)
+}
+
+fn linear(at: Vector3<f64>, velocity: Vector3<f64>) -> Motion {
+    Motion::from_velocities(
+        Isometry3::from_parts(Translation3::from(at), UnitQuaternion::identity()),
+        Point3::from(at),
+        velocity,
+        Vector3::zeros(),
+        DT,
+    )
+    .unwrap()
+}
+
+fn ball_toi(
+    r1: f32,
+    m1: &Motion,
+    r2: f32,
+    m2: &Motion,
+    options: &QueryOptions,
+) -> Option<affine_ccd::Toi> {
+    time_of_impact(&Ball::new(r1), m1, &Ball::new(r2), m2, options).unwrap()
+}
+
+#[test]
+fn grazing_at_the_skin_is_decided_by_the_side_of_the_skin() {
+    // Ball 1 (r = 0.5) passes ball 2 (r = 0.5) with its centre's closest
+    // approach 1 + skin + offset; skin = 0.01.
+    let skin = 0.01;
+    for kind in Arithmetic::ALL {
+        let options = QueryOptions {
+            skin,
+            arithmetic: kind,
+            epsilon: 1e-6,
+            ..QueryOptions::default()
+        };
+        for (offset, must_hit) in [(-1e-6, true), (1e-4, false), (-1e-4, true)] {
+            let y = 1.0 + skin + offset;
+            let m1 = linear(Vector3::new(-1.0, y, 0.0), Vector3::new(120.0, 0.0, 0.0));
+            let m2 = Motion::fixed(Isometry3::identity()).unwrap();
+            let got = ball_toi(0.5, &m1, 0.5, &m2, &options);
+            if must_hit {
+                let toi = got
+                    .unwrap_or_else(|| panic!("{kind:?}: missed a pass {offset} inside the skin"));
+                // Closest approach is at x = 0: τ = 1/2.
+                assert!(
+                    toi.fraction <= 0.5 + 1e-9,
+                    "{kind:?}: {} after closest approach",
+                    toi.fraction
+                );
+            } else {
+                assert!(
+                    got.is_none(),
+                    "{kind:?}: a pass {offset} outside the skin reported {got:?}"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn contact_at_the_start_and_at_the_end_of_the_step() {
+    let options = QueryOptions::default();
+    // Touching at τ = 0: reported as such.
+    let m1 = linear(Vector3::new(-1.0, 0.0, 0.0), Vector3::new(-60.0, 0.0, 0.0));
+    let m2 = Motion::fixed(Isometry3::identity()).unwrap();
+    let toi = ball_toi(0.5, &m1, 0.5, &m2, &options).expect("touching at the start");
+    assert_eq!(toi.status, RootStatus::InitiallyTouching);
+    assert_eq!(toi.fraction, 0.0);
+    // Contact exactly at τ = 1: centre from x = −2 to −1 in the step.
+    let m1 = linear(Vector3::new(-2.0, 0.0, 0.0), Vector3::new(60.0, 0.0, 0.0));
+    let toi = ball_toi(0.5, &m1, 0.5, &m2, &options).expect("touching at the end");
+    assert_eq!(toi.status, RootStatus::Hit);
+    assert!(
+        toi.fraction <= 1.0 && 1.0 - toi.fraction <= options.epsilon,
+        "{}",
+        toi.fraction
+    );
+}
+
+/// Earliest sampled τ at which the two ball centres come within `reach`.
+fn sampled(m1: &Motion, m2: &Motion, reach: f64) -> Option<f64> {
+    let gap = |t: f64| {
+        (m1.pose_at(t).translation.vector - m2.pose_at(t).translation.vector).norm() - reach
+    };
+    let n = 1 << 16;
+    (0..=n)
+        .map(|i| i as f64 / n as f64)
+        .find(|&t| gap(t) <= 0.0)
+}
+
+#[test]
+fn many_turns_in_one_step_stay_correct() {
+    // A ball 1 m off the axis of a body turning by π, 2π and 20π in one
+    // step sweeps past a fixed ball placed on its circle.
+    for turns in [0.5, 1.0, 10.0] {
+        let w = std::f64::consts::TAU * turns / DT;
+        let start = Isometry3::translation(1.0, 0.0, 0.0);
+        let m1 = Motion::from_velocities(
+            start,
+            Point3::origin(),
+            Vector3::zeros(),
+            Vector3::new(0.0, 0.0, w),
+            DT,
+        )
+        .unwrap();
+        // The target sits at angle 3π/4 (reached after 3/8 of a turn).
+        let a = 0.75 * std::f64::consts::PI;
+        let m2 = Motion::fixed(Isometry3::translation(a.cos(), a.sin(), 0.0)).unwrap();
+        let truth = sampled(&m1, &m2, 0.2);
+        for kind in Arithmetic::ALL {
+            let options = QueryOptions {
+                arithmetic: kind,
+                ..QueryOptions::default()
+            };
+            let toi = ball_toi(0.1, &m1, 0.1, &m2, &options);
+            match (truth, toi) {
+                (Some(t), Some(toi)) => {
+                    assert!(
+                        toi.fraction <= t + 1e-9,
+                        "{turns} turns {kind:?}: {} after {t}",
+                        toi.fraction
+                    );
+                    assert!(
+                        t - toi.fraction <= 2e-4,
+                        "{turns} turns {kind:?}: {} vs {t}",
+                        toi.fraction
+                    );
+                }
+                (Some(t), None) if turns >= 0.5 => panic!("{turns} turns {kind:?}: missed {t}"),
+                _ => {}
+            }
+        }
+        assert!(truth.is_some(), "{turns} turns: the set-up should collide");
+    }
+}
+
+#[test]
+fn tiny_huge_and_far_shapes() {
+    // (radius, distance scale, origin offset)
+    for (r, scale, far) in [
+        (1e-4, 1e-3, 0.0),
+        (1e4, 3e4, 0.0),
+        (0.5, 2.0, 1e4),
+        (0.5, 2.0, 1e5),
+    ] {
+        let origin = p32(far, far, -far);
+        let m1 = linear(
+            origin + p32(-scale, 0.0, 0.0),
+            Vector3::new(2.0 * scale / DT, 0.0, 0.0),
+        );
+        let m2 = Motion::fixed(Isometry3::translation(origin.x, origin.y, origin.z)).unwrap();
+        let reach = 2.0 * f64::from(r as f32);
+        // The centre travels along x (from about −scale to +scale, as
+        // rounded to f32): contact when x = origin − reach.
+        let x0 = m1.pose_at(0.0).translation.x - origin.x;
+        let t_true = (-reach - x0) / m1.displacement().x;
+        let toi = ball_toi(r as f32, &m1, r as f32, &m2, &QueryOptions::default())
+            .unwrap_or_else(|| panic!("r={r} scale={scale} far={far}: missed"));
+        assert!(
+            toi.fraction <= t_true + 1e-9,
+            "r={r} far={far}: {} after {t_true}",
+            toi.fraction
+        );
+        assert!(
+            t_true - toi.fraction <= 1e-4 + 1e-9,
+            "r={r} far={far}: {} vs {t_true}",
+            toi.fraction
+        );
+    }
+}
+
+#[test]
+fn zero_motion_and_rotation_about_the_contact_point() {
+    let options = QueryOptions::default();
+    // Two apart balls, neither moving: no impact, cheaply.
+    let m1 = Motion::fixed(Isometry3::translation(-1.0, 0.0, 0.0)).unwrap();
+    let m2 = Motion::fixed(Isometry3::translation(1.0, 0.0, 0.0)).unwrap();
+    let got = time_of_impact(&Ball::new(0.5), &m1, &Ball::new(0.5), &m2, &options).unwrap();
+    assert!(got.is_none());
+    // A ball spinning about its own centre, next to another: its centre
+    // does not move, so nothing happens however fast it spins.
+    let m1 = Motion::from_velocities(
+        Isometry3::translation(-1.0, 0.0, 0.0),
+        Point3::new(-1.0, 0.0, 0.0),
+        Vector3::zeros(),
+        Vector3::new(0.0, 0.0, 1000.0),
+        DT,
+    )
+    .unwrap();
+    let got = time_of_impact(&Ball::new(0.5), &m1, &Ball::new(0.49), &m2, &options).unwrap();
+    assert!(got.is_none(), "a ball spinning in place reported {got:?}");
+}
+
+#[test]
+fn same_input_same_output_bit_for_bit() {
+    let run = || {
+        let m1 = Motion::from_velocities(
+            Isometry3::translation(-1.0, 0.2, 0.1),
+            Point3::new(-1.2, 0.2, 0.1),
+            Vector3::new(90.0, 1.0, -2.0),
+            Vector3::new(3.0, 40.0, -7.0),
+            DT,
+        )
+        .unwrap();
+        let m2 = Motion::fixed(Isometry3::translation(0.5, 0.0, 0.0)).unwrap();
+        Arithmetic::ALL.map(|kind| {
+            let options = QueryOptions {
+                arithmetic: kind,
+                ..QueryOptions::default()
+            };
+            time_of_impact(&Ball::new(0.3), &m1, &Ball::new(0.3), &m2, &options)
+                .unwrap()
+                .map(|t| (t.fraction.to_bits(), t.stats.pair_evaluations))
+        })
+    };
+    let first = run();
+    assert!(
+        first.iter().all(Option::is_some),
+        "the set-up should hit: {first:?}"
+    );
+    for _ in 0..5 {
+        assert_eq!(run(), first);
+    }
+}
+
+#[test]
+fn bad_options_and_sizes_are_typed_errors_naming_the_value() {
+    let m = Motion::fixed(Isometry3::identity()).unwrap();
+    for (options, name) in [
+        (
+            QueryOptions {
+                epsilon: 0.0,
+                ..QueryOptions::default()
+            },
+            "epsilon",
+        ),
+        (
+            QueryOptions {
+                epsilon: f64::NAN,
+                ..QueryOptions::default()
+            },
+            "epsilon",
+        ),
+        (
+            QueryOptions {
+                skin: -1.0,
+                ..QueryOptions::default()
+            },
+            "skin",
+        ),
+        (
+            QueryOptions {
+                skin: f64::INFINITY,
+                ..QueryOptions::default()
+            },
+            "skin",
+        ),
+        (
+            QueryOptions {
+                max_evaluations: 0,
+                ..QueryOptions::default()
+            },
+            "max_evaluations",
+        ),
+    ] {
+        let err = time_of_impact(&Ball::new(1.0), &m, &Ball::new(1.0), &m, &options).unwrap_err();
+        assert!(err.to_string().contains(name), "{err} does not name {name}");
+    }
+    for radius in [f32::NAN, f32::INFINITY, -1.0] {
+        let err = time_of_impact(
+            &Ball::new(radius),
+            &m,
+            &Ball::new(1.0),
+            &m,
+            &QueryOptions::default(),
+        );
+        let err = err.expect_err("a bad radius must be an error");
+        assert!(err.to_string().contains("radius"), "{err}");
+    }
+    // A huge but finite budget is fine.
+    let options = QueryOptions {
+        max_evaluations: u64::MAX,
+        ..QueryOptions::default()
+    };
+    assert!(time_of_impact(&Ball::new(1.0), &m, &Ball::new(1.0), &m, &options).is_ok());
+}
