@@ -18,6 +18,7 @@ pub(crate) mod gap;
 pub mod motion;
 pub mod query;
 pub mod solve;
+pub mod truth;
 
 pub use enclosure::{Affine, Arithmetic, Enclosure, Interval, Taylor, Taylor2, Taylor3, TimeSpan};
 pub use error::CcdError;

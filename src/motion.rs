@@ -20,6 +20,8 @@
 //! motion so defined. [`Motion::pose_at`] evaluates the same definition in
 //! plain `f64` for ground truth and for the pose reported at an impact.
 
+use crate::enclosure::rounding::up;
+use crate::enclosure::series;
 use crate::enclosure::{Enclosure, Interval, TimeSpan};
 use crate::error::{CcdError, check_finite};
 use nalgebra::{Isometry3, Matrix3, Point3, Translation3, UnitQuaternion, Vector3};
@@ -75,15 +77,29 @@ pub trait Trajectory {
 
     /// The pose at one `τ`, in plain `f64` (ground truth, reported poses).
     fn pose_at(&self, tau: f64) -> Isometry3<f64>;
+
+    /// Only the frame's origin over `span`: all a shape whose distance
+    /// ignores its orientation (a ball) needs, and cheaper than [`pose`].
+    ///
+    /// [`pose`]: Trajectory::pose
+    fn origin<E: Enclosure>(&self, span: TimeSpan) -> Vector3<E> {
+        self.pose(span).translation
+    }
 }
 
-/// The constant-rotation part of a motion, prepared once: the angle per step
-/// `|θ|`, and `K = [k]×`, `K² = k·kᵀ − I` for the unit axis `k`, all enclosed.
+/// The constant-rotation part of a motion, prepared once: the angle per
+/// step `|θ|`, and `K = [k]×`, `K² = k·kᵀ − I` for the unit axis `k`. They
+/// are computed in interval arithmetic, then kept as `f64` values plus one
+/// error radius each, so that the per-node work multiplies enclosures by
+/// plain numbers.
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct Spin {
-    angle: Interval,
-    k: Matrix3<Interval>,
-    k2: Matrix3<Interval>,
+    angle: f64,
+    angle_err: f64,
+    k: Matrix3<f64>,
+    k2: Matrix3<f64>,
+    /// The largest error radius of any entry of `k` or `k2`.
+    matrix_err: f64,
 }
 
 impl Spin {
@@ -100,17 +116,8 @@ impl Spin {
         let angle = (t.x.sqr() + t.y.sqr() + t.z.sqr()).sqrt().ok()?;
         let inv = angle.recip().ok()?;
         let k = t.map(|x| x * inv);
-        let skew = Matrix3::new(
-            Interval::point(0.0),
-            -k.z,
-            k.y,
-            k.z,
-            Interval::point(0.0),
-            -k.x,
-            -k.y,
-            k.x,
-            Interval::point(0.0),
-        );
+        let zero = Interval::point(0.0);
+        let skew = Matrix3::new(zero, -k.z, k.y, k.z, zero, -k.x, -k.y, k.x, zero);
         let k2 = Matrix3::from_fn(|i, j| {
             let kk = k[i] * k[j];
             if i == j {
@@ -119,15 +126,26 @@ impl Spin {
                 kk
             }
         });
-        Some(Spin { angle, k: skew, k2 })
+        let radius = |iv: &Interval| up(iv.hi - iv.mid()).max(up(iv.mid() - iv.lo));
+        let matrix_err = skew.iter().chain(k2.iter()).map(radius).fold(0.0, f64::max);
+        Some(Spin {
+            angle: angle.mid(),
+            angle_err: radius(&angle),
+            k: skew.map(|iv| iv.mid()),
+            k2: k2.map(|iv| iv.mid()),
+            matrix_err,
+        })
     }
 
-    /// `exp(τ[θ]×)` over the node.
+    /// `exp(τ[θ]×) = I + sin φ·K + (1 − cos φ)·K²` over the node.
     fn matrix<E: Enclosure>(&self, tau: E) -> Matrix3<E> {
-        let phi = tau.scale(self.angle);
-        let (s, c) = (phi.sin(), E::one() - phi.cos());
+        let phi = (tau * self.angle).widen(up(self.angle_err * tau.range().mag()));
+        let (s, cos) = series::sin_cos(phi);
+        let c = E::one() - cos;
+        // The entries' own error, times the largest |sin φ| and |1 − cos φ|.
+        let slack = up(self.matrix_err * up(s.range().mag() + c.range().mag()));
         Matrix3::from_fn(|i, j| {
-            let m = s.scale(self.k[(i, j)]) + c.scale(self.k2[(i, j)]);
+            let m = (s * self.k[(i, j)] + c * self.k2[(i, j)]).widen(slack);
             if i == j { m + 1.0 } else { m }
         })
     }
@@ -289,6 +307,11 @@ impl Motion {
         self.center
     }
 
+    /// The frame's orientation at `τ = 0`, as the matrix the enclosures use.
+    pub fn start_rotation_matrix(&self) -> Matrix3<f64> {
+        self.start_matrix
+    }
+
     /// The step's rotation vector `ω·dt`, radians.
     pub fn rotation(&self) -> Vector3<f64> {
         self.rotation
@@ -316,6 +339,16 @@ impl Motion {
         let reach = self.arm.norm() + radius;
         let turning = reach * angle.min(2.0);
         (linear + turning) * (1.0 + 4.0 * f64::EPSILON) + f64::MIN_POSITIVE
+    }
+
+    /// The arm from the centre to the frame's origin, turned by `turn`.
+    fn turned_arm<E: Enclosure>(&self, turn: &Matrix3<E>) -> Vector3<E> {
+        if self.arm == Vector3::zeros() {
+            return Vector3::from_element(E::zero());
+        }
+        Vector3::from_fn(|i, _| {
+            turn[(i, 0)] * self.arm.x + turn[(i, 1)] * self.arm.y + turn[(i, 2)] * self.arm.z
+        })
     }
 
     /// The centre of mass over the node.
@@ -356,28 +389,31 @@ impl Trajectory for Motion {
     fn pose<E: Enclosure>(&self, span: TimeSpan) -> Pose<E> {
         let tau = E::time(span);
         let center = self.center_at(tau);
-        match &self.spin {
-            None => Pose {
+        let Some(spin) = &self.spin else {
+            return Pose {
                 rotation: self.start_matrix.map(E::constant),
                 translation: center + self.arm.map(E::constant),
-            },
-            Some(spin) => {
-                let turn = spin.matrix(tau);
-                let rotation = Matrix3::from_fn(|i, j| {
-                    turn[(i, 0)] * self.start_matrix[(0, j)]
-                        + turn[(i, 1)] * self.start_matrix[(1, j)]
-                        + turn[(i, 2)] * self.start_matrix[(2, j)]
-                });
-                let arm = Vector3::from_fn(|i, _| {
-                    turn[(i, 0)] * self.arm.x
-                        + turn[(i, 1)] * self.arm.y
-                        + turn[(i, 2)] * self.arm.z
-                });
-                Pose {
-                    rotation,
-                    translation: center + arm,
-                }
-            }
+            };
+        };
+        let turn = spin.matrix(tau);
+        let rotation = Matrix3::from_fn(|i, j| {
+            turn[(i, 0)] * self.start_matrix[(0, j)]
+                + turn[(i, 1)] * self.start_matrix[(1, j)]
+                + turn[(i, 2)] * self.start_matrix[(2, j)]
+        });
+        Pose {
+            rotation,
+            translation: center + self.turned_arm(&turn),
+        }
+    }
+
+    fn origin<E: Enclosure>(&self, span: TimeSpan) -> Vector3<E> {
+        let tau = E::time(span);
+        let center = self.center_at(tau);
+        match &self.spin {
+            None => center + self.arm.map(E::constant),
+            Some(_) if self.arm == Vector3::zeros() => center,
+            Some(spin) => center + self.turned_arm(&spin.matrix(tau)),
         }
     }
 

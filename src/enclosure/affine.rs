@@ -7,7 +7,7 @@
 //! cross products with the operands are accounted for in full, so the form
 //! is sound and its excess width falls with the square of the node width.
 
-use super::rounding::{add_up, down, err, mul_up, up};
+use super::rounding::{bound, down, up};
 use super::{Arithmetic, Enclosure, Interval, TimeSpan, series};
 use crate::CcdError;
 use std::ops::{Add, AddAssign, Mul, MulAssign, Neg, Sub, SubAssign};
@@ -39,11 +39,6 @@ impl Affine {
             Affine::ENTIRE
         }
     }
-
-    /// `|c| + |s|`, rounded up: the largest magnitude of the linear part.
-    fn linear_mag(&self) -> f64 {
-        add_up(self.c.abs(), self.s.abs())
-    }
 }
 
 impl Add for Affine {
@@ -51,7 +46,8 @@ impl Add for Affine {
     fn add(self, o: Affine) -> Affine {
         let c = self.c + o.c;
         let s = self.s + o.s;
-        let r = add_up(add_up(self.r, o.r), add_up(err(c), err(s)));
+        // Each rounded result x is off by at most 2⁻⁵²·|x| (plus underflow).
+        let r = bound(self.r + o.r + (c.abs() + s.abs()) * f64::EPSILON);
         Affine::checked(c, s, r)
     }
 }
@@ -73,18 +69,11 @@ impl Mul for Affine {
         let c = c00 + half11;
         let (p01, p10) = (self.c * o.s, self.s * o.c);
         let s = p01 + p10;
-        let rounding = add_up(
-            add_up(err(c00), add_up(err(half11), err(c))),
-            add_up(add_up(err(p01), err(p10)), err(s)),
-        );
-        let cross = add_up(
-            add_up(
-                mul_up(self.linear_mag(), o.r),
-                mul_up(o.linear_mag(), self.r),
-            ),
-            mul_up(self.r, o.r),
-        );
-        let r = add_up(add_up(half11.abs(), cross), rounding);
+        let rounding =
+            (c00.abs() + half11.abs() + c.abs() + p01.abs() + p10.abs() + s.abs()) * f64::EPSILON;
+        let cross =
+            (self.c.abs() + self.s.abs()) * o.r + (o.c.abs() + o.s.abs()) * self.r + self.r * o.r;
+        let r = bound(half11.abs() + cross + rounding);
         Affine::checked(c, s, r)
     }
 }
@@ -104,7 +93,7 @@ impl Add<f64> for Affine {
     type Output = Affine;
     fn add(self, k: f64) -> Affine {
         let c = self.c + k;
-        Affine::checked(c, self.s, add_up(self.r, err(c)))
+        Affine::checked(c, self.s, bound(self.r + c.abs() * f64::EPSILON))
     }
 }
 
@@ -119,7 +108,7 @@ impl Mul<f64> for Affine {
     type Output = Affine;
     fn mul(self, k: f64) -> Affine {
         let (c, s) = (self.c * k, self.s * k);
-        let r = add_up(mul_up(self.r, k.abs()), add_up(err(c), err(s)));
+        let r = bound(self.r * k.abs() + (c.abs() + s.abs()) * f64::EPSILON);
         Affine::checked(c, s, r)
     }
 }
@@ -186,14 +175,17 @@ impl Enclosure for Affine {
     }
 
     fn widen(self, radius: f64) -> Affine {
-        Affine::checked(self.c, self.s, add_up(self.r, radius))
+        Affine::checked(self.c, self.s, bound(self.r + radius))
     }
 
     fn scale(self, factor: Interval) -> Affine {
         // x·f = x·mid(f) + x·(f − mid(f)), the second part bounded by |x|·rad.
         let mid = factor.mid();
-        let rad = up(factor.hi - mid).max(up(mid - factor.lo));
-        (self * mid).widen(mul_up(self.range().mag(), rad))
+        let rad = (factor.hi - mid).max(mid - factor.lo);
+        let mag = self.c.abs() + self.s.abs() + self.r;
+        let (c, s) = (self.c * mid, self.s * mid);
+        let r = bound(self.r * mid.abs() + (c.abs() + s.abs()) * f64::EPSILON + mag * rad);
+        Affine::checked(c, s, r)
     }
 
     fn sqr(self) -> Affine {
@@ -201,12 +193,9 @@ impl Enclosure for Affine {
         let half11 = 0.5 * (self.s * self.s);
         let c = c00 + half11;
         let s = 2.0 * (self.c * self.s);
-        let rounding = add_up(add_up(err(c00), err(half11)), add_up(err(c), err(s)));
-        let cross = add_up(
-            mul_up(2.0, mul_up(self.linear_mag(), self.r)),
-            mul_up(self.r, self.r),
-        );
-        let r = add_up(add_up(half11, cross), rounding);
+        let rounding = (c00 + half11 + c.abs() + s.abs()) * f64::EPSILON;
+        let cross = 2.0 * (self.c.abs() + self.s.abs()) * self.r + self.r * self.r;
+        let r = bound(half11 + cross + rounding);
         Affine::checked(c, s, r)
     }
 

@@ -37,7 +37,7 @@
 mod affine;
 mod interval;
 pub(crate) mod rounding;
-mod series;
+pub(crate) mod series;
 mod taylor;
 
 pub use affine::Affine;

@@ -16,12 +16,17 @@ use crate::CcdError;
 /// `Σ coefs[k]·δᵏ ± rem·|δ|ⁿ⁺¹` with `δ = x − x0`, by Horner's rule.
 fn expand<E: Enclosure>(x: E, x0: f64, coefs: &[Interval], rem: Interval) -> E {
     let delta = x - x0;
+    expand_about(delta, delta.range().mag(), coefs, rem)
+}
+
+/// [`expand`] with `δ = x − x0` and its largest magnitude `dmax` given.
+fn expand_about<E: Enclosure>(delta: E, dmax: f64, coefs: &[Interval], rem: Interval) -> E {
     let n = coefs.len() - 1;
     let mut acc = E::from_interval(coefs[n]);
     for k in (0..n).rev() {
         acc = acc * delta + E::from_interval(coefs[k]);
     }
-    let dmax = Interval::point(delta.range().mag());
+    let dmax = Interval::point(dmax);
     let mut tail = rem;
     for _ in 0..=n {
         tail *= dmax;
@@ -65,35 +70,61 @@ fn half_binomial_ratio(k: usize) -> Interval {
     Interval::point(0.5 - (k - 1) as f64) * inv(k as f64)
 }
 
-/// sin or cos (`cosine = true`) of any enclosure: the series about the
-/// range's midpoint, or `[−1, 1]` information alone when that is much
-/// narrower (see [`prefer_series`]).
-pub(crate) fn trig<E: Enclosure>(x: E, cosine: bool) -> E {
+/// `(sin x, cos x)` of any enclosure: the series about the range's
+/// midpoint (sharing the midpoint, libm's values there and the powers of
+/// `x − x0`), or `[−1, 1]` information alone when that is narrower.
+pub(crate) fn sin_cos<E: Enclosure>(x: E) -> (E, E) {
     let range = x.range();
     if !range.is_bounded() || range.width() > 8.0 {
         // Beyond about a turn the series says less than |f| ≤ 1.
-        return E::from_interval(Interval::new(-1.0, 1.0));
+        let unit = E::from_interval(Interval::new(-1.0, 1.0));
+        return (unit, unit);
     }
     let x0 = range.mid();
     let n = E::DEGREE.max(1);
-    // f(x0), f'(x0), f''(x0)/2, …: derivatives cycle sin, cos, −sin, −cos.
+    let (s, c) = x0.sin_cos();
     let (s, c) = (
-        Interval::around(x0.sin(), super::rounding::LIBM_SLACK),
-        Interval::around(x0.cos(), super::rounding::LIBM_SLACK),
+        Interval::around(s, super::rounding::LIBM_SLACK),
+        Interval::around(c, super::rounding::LIBM_SLACK),
     );
-    let cycle = if cosine {
-        [c, -s, -c, s]
-    } else {
-        [s, c, -s, -c]
-    };
-    let mut coefs = [Interval::point(0.0); 8];
-    for (k, coef) in coefs.iter_mut().enumerate().take(n + 1) {
-        *coef = cycle[k % 4] * inv_factorial(k);
+    // f(x0), f'(x0), f''(x0)/2!, …: derivatives cycle sin, cos, −sin, −cos.
+    let mut sin_coefs = [Interval::point(0.0); 8];
+    let mut cos_coefs = [Interval::point(0.0); 8];
+    let sin_cycle = [s, c, -s, -c];
+    let cos_cycle = [c, -s, -c, s];
+    for k in 0..=n {
+        sin_coefs[k] = sin_cycle[k % 4] * inv_factorial(k);
+        cos_coefs[k] = cos_cycle[k % 4] * inv_factorial(k);
     }
-    let series = expand(x, x0, &coefs[..=n], inv_factorial(n + 1));
-    let clamp = series.range();
-    if clamp.lo < -1.0 || clamp.hi > 1.0 {
-        let bounded = Interval::new(clamp.lo.max(-1.0), clamp.hi.min(1.0));
+    let delta = x - x0;
+    let dmax = delta.range().mag();
+    let sin = clamp_unit(expand_about(
+        delta,
+        dmax,
+        &sin_coefs[..=n],
+        inv_factorial(n + 1),
+    ));
+    let cos = clamp_unit(expand_about(
+        delta,
+        dmax,
+        &cos_coefs[..=n],
+        inv_factorial(n + 1),
+    ));
+    (sin, cos)
+}
+
+/// sin or cos (`cosine = true`) of any enclosure.
+pub(crate) fn trig<E: Enclosure>(x: E, cosine: bool) -> E {
+    let (s, c) = sin_cos(x);
+    if cosine { c } else { s }
+}
+
+/// A sine or cosine enclosure, or `[−1, 1]`'s part of its range when the
+/// series overshoots that much.
+fn clamp_unit<E: Enclosure>(series: E) -> E {
+    let range = series.range();
+    if range.lo < -1.0 || range.hi > 1.0 {
+        let bounded = Interval::new(range.lo.max(-1.0), range.hi.min(1.0));
         prefer_series(series, E::from_interval(bounded))
     } else {
         series

@@ -23,7 +23,10 @@ use rapier3d::parry::shape::{Shape, TypedShape};
 
 /// One shape of a pair as an axis function sees it on a node.
 pub(crate) struct Side<'p, E: Enclosure> {
-    /// The shape frame's pose over the node.
+    /// The shape frame's pose over the node. Its `rotation` is meaningful
+    /// only when the family says it reads it ([`PairGap::reads_rotation`]);
+    /// otherwise it may hold the start rotation alone (saves a matrix
+    /// product per node for balls).
     pub pose: &'p Pose<E>,
     /// The frame's whole motion (for adaptive choices at the node's middle).
     #[allow(dead_code)] // read by the adaptive-axis families
@@ -41,6 +44,15 @@ impl PairGap {
     pub fn axis_count(&self) -> usize {
         match self {
             PairGap::BallBall(_) => BallBall::AXES,
+        }
+    }
+
+    /// Whether the family reads each side's rotation, `[a, b]`.
+    pub fn reads_rotation(&self) -> [bool; 2] {
+        match self {
+            PairGap::BallBall(_) => [false, false],
+            #[allow(unreachable_patterns)]
+            _ => [true, true],
         }
     }
 

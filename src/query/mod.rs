@@ -236,10 +236,18 @@ impl Query {
         pairs: &[PairEntry],
         options: &SolveOptions,
     ) -> Result<SolveOutcome, CcdError> {
+        // A motion's rotation is enclosed only if some pair reads it.
+        let mut rotation_read = vec![false; motions.len()];
+        for pair in pairs {
+            let [a, b] = pair.gap.reads_rotation();
+            rotation_read[pair.a] |= a;
+            rotation_read[pair.b] |= b;
+        }
         let mut set = PairSet::<E> {
             motions,
             pairs,
             poses: vec![None; motions.len()],
+            rotation_read,
         };
         self.solver.solve(&mut set, options)
     }
@@ -261,11 +269,24 @@ struct PairSet<'q, E: Enclosure> {
     motions: &'q [Motion],
     pairs: &'q [PairEntry],
     poses: Vec<Option<Pose<E>>>,
+    /// Per motion: does any pair read its rotation?
+    rotation_read: Vec<bool>,
 }
 
 impl<E: Enclosure> PairSet<'_, E> {
     fn pose(&mut self, index: usize, span: TimeSpan) -> Pose<E> {
-        *self.poses[index].get_or_insert_with(|| self.motions[index].pose(span))
+        let motion = &self.motions[index];
+        let with_rotation = self.rotation_read[index];
+        *self.poses[index].get_or_insert_with(|| {
+            if with_rotation {
+                motion.pose(span)
+            } else {
+                // Only the origin is read: the rotation stays at its start.
+                let mut pose = Pose::constant(&motion.start_rotation_matrix(), &Vector3::zeros());
+                pose.translation = motion.origin(span);
+                pose
+            }
+        })
     }
 }
 
@@ -279,7 +300,12 @@ impl<E: Enclosure> GapSet<E> for PairSet<'_, E> {
     }
 
     fn begin_node(&mut self, _span: TimeSpan) {
-        self.poses.iter_mut().for_each(|p| *p = None);
+        // A fixed frame's pose is the same on every node: keep it.
+        for (pose, motion) in self.poses.iter_mut().zip(self.motions) {
+            if !motion.is_fixed() {
+                *pose = None;
+            }
+        }
     }
 
     fn eval(&mut self, pair: usize, span: TimeSpan, axes: u64, out: &mut [E]) {
