@@ -39,7 +39,7 @@ mod tests {
     fn every_scene_builds_with_guards() {
         for scene in all() {
             let (world, setup) = scene.instantiate();
-            assert!(world.bodies.len() > 0, "{} has no bodies", scene.name);
+            assert!(!world.bodies.is_empty(), "{} has no bodies", scene.name);
             assert!(!setup.guards.is_empty(), "{} has no guards", scene.name);
         }
     }

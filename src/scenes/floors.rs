@@ -103,51 +103,53 @@ fn slabs_on_terrain(world: &mut PhysicsWorld) -> Setup {
     }
 }
 
-/// `count` balls of radius `radius` over a square of half-size `spread`
-/// around `center`, between `low` and `high` metres above it, all moving at
-/// `velocity`.
-fn shower(
-    world: &mut PhysicsWorld,
-    rng: &mut Lcg,
+/// A shower of small CCD balls: `count` balls of radius `radius` over a
+/// square of half-size `spread` around `center`, `low` to `high` metres above
+/// it, all moving at `velocity` (m/s).
+struct Shower {
     center: Vector,
     count: usize,
     radius: Real,
     spread: Real,
-    (low, high): (Real, Real),
+    low: Real,
+    high: Real,
     velocity: Vector,
-) -> Vec<RigidBodyHandle> {
-    (0..count)
-        .map(|_| {
-            let offset = Vector::new(
-                rng.range(-spread, spread),
-                rng.range(low, high),
-                rng.range(-spread, spread),
-            );
-            let body = RigidBodyBuilder::dynamic()
-                .translation(center + offset)
-                .linvel(velocity)
-                .ccd_enabled(true);
-            world.insert(body, ColliderBuilder::ball(radius)).0
-        })
-        .collect()
+}
+
+impl Shower {
+    fn spawn(&self, world: &mut PhysicsWorld, seed: u64) -> Vec<RigidBodyHandle> {
+        let mut rng = Lcg(seed);
+        (0..self.count)
+            .map(|_| {
+                let offset = Vector::new(
+                    rng.range(-self.spread, self.spread),
+                    rng.range(self.low, self.high),
+                    rng.range(-self.spread, self.spread),
+                );
+                let body = RigidBodyBuilder::dynamic()
+                    .translation(self.center + offset)
+                    .linvel(self.velocity)
+                    .ccd_enabled(true);
+                world.insert(body, ColliderBuilder::ball(self.radius)).0
+            })
+            .collect()
+    }
 }
 
 fn rain(world: &mut PhysicsWorld) -> Setup {
     let Some(floor) = fixed_mesh(world, grid_mesh(-5.0, -5.0, 10.0, 4, |_, _| 0.0)) else {
         return Setup::default();
     };
-    let mut rng = Lcg(11);
-    let velocity = Vector::new(0.0, -60.0, 0.0);
-    let balls = shower(
-        world,
-        &mut rng,
-        Vector::ZERO,
-        80,
-        0.03,
-        4.0,
-        (2.0, 6.0),
-        velocity,
-    );
+    let balls = Shower {
+        center: Vector::ZERO,
+        count: 80,
+        radius: 0.03,
+        spread: 4.0,
+        low: 2.0,
+        high: 6.0,
+        velocity: Vector::new(0.0, -60.0, 0.0),
+    }
+    .spawn(world, 11);
     Setup {
         guards: crossing_guards(&balls, &[floor]),
         ..Setup::default()
@@ -158,18 +160,16 @@ fn rain_dt10(world: &mut PhysicsWorld) -> Setup {
     let Some(floor) = fixed_mesh(world, grid_mesh(-5.0, -5.0, 10.0, 4, |_, _| 0.0)) else {
         return Setup::default();
     };
-    let mut rng = Lcg(13);
-    let velocity = Vector::new(0.0, -40.0, 0.0);
-    let balls = shower(
-        world,
-        &mut rng,
-        Vector::ZERO,
-        40,
-        0.05,
-        4.0,
-        (1.0, 6.0),
-        velocity,
-    );
+    let balls = Shower {
+        center: Vector::ZERO,
+        count: 40,
+        radius: 0.05,
+        spread: 4.0,
+        low: 1.0,
+        high: 6.0,
+        velocity: Vector::new(0.0, -40.0, 0.0),
+    }
+    .spawn(world, 13);
     Setup {
         guards: crossing_guards(&balls, &[floor]),
         ..Setup::default()
@@ -191,18 +191,16 @@ fn far_from_origin(world: &mut PhysicsWorld) -> Setup {
         0,
         1.0,
     );
-    let mut rng = Lcg(17);
-    let velocity = Vector::new(0.0, -40.0, 0.0);
-    let balls = shower(
-        world,
-        &mut rng,
-        origin - Vector::X * 2.0,
-        20,
-        0.04,
-        2.5,
-        (1.0, 4.0),
-        velocity,
-    );
+    let balls = Shower {
+        center: origin - Vector::X * 2.0,
+        count: 20,
+        radius: 0.04,
+        spread: 2.5,
+        low: 1.0,
+        high: 4.0,
+        velocity: Vector::new(0.0, -40.0, 0.0),
+    }
+    .spawn(world, 17);
     let bullets: Vec<_> = (0..4)
         .map(|k| {
             let at = origin + Vector::new(-1.0, 1.0 + 0.6 * k as Real, 0.8 * k as Real - 1.2);

@@ -147,7 +147,7 @@ pub fn beyond_guards(bodies: &[RigidBodyHandle], face: Face) -> Vec<Guard> {
 pub struct Lcg(pub u64);
 
 impl Lcg {
-    pub fn next(&mut self) -> Real {
+    pub fn unit(&mut self) -> Real {
         self.0 = self
             .0
             .wrapping_mul(6364136223846793005)
@@ -157,6 +157,6 @@ impl Lcg {
 
     /// A value in [lo, hi).
     pub fn range(&mut self, lo: Real, hi: Real) -> Real {
-        lo + (hi - lo) * self.next()
+        lo + (hi - lo) * self.unit()
     }
 }
