@@ -16,6 +16,8 @@ const MAX_PATHS: usize = 80;
 const MAX_TRIANGLES: usize = 4000;
 /// Drawing size in pixels (the longer side).
 const SIZE: Real = 900.0;
+/// Obstacle segments longer than this (metres) do not set the frame.
+const MAX_FRAMED_SEGMENT: Real = 0.5 * PLANE_SPAN;
 /// Half-spaces are drawn as a segment this long (metres) around their point.
 const PLANE_SPAN: Real = 50.0;
 
@@ -74,15 +76,21 @@ impl Trace {
 
     /// The SVG document, titled `title`.
     pub fn to_svg(&self, title: &str) -> String {
-        let [h, v] = self.view;
+        let [h, v] = [self.view[0].min(2), self.view[1].min(2)];
         let project = |p: Vector| (p[h], p[v]);
-        // Frame the trajectories and the events; obstacles may be huge
-        // (half-spaces), so they do not set the frame unless nothing else does.
+        // Frame the trajectories, the events and the obstacles of a sane
+        // size (a half-space's long cross would squash everything else).
+        let finite_segments = self
+            .segments
+            .iter()
+            .filter(|(a, b)| (*a - *b).length() < MAX_FRAMED_SEGMENT)
+            .flat_map(|(a, b)| [project(*a), project(*b)]);
         let mut points: Vec<(Real, Real)> = self
             .paths
             .iter()
             .flat_map(|(_, path)| path.iter().copied().map(project))
             .chain(self.tunnels.iter().copied().map(project))
+            .chain(finite_segments)
             .filter(|(x, y)| x.is_finite() && y.is_finite())
             .collect();
         if points.is_empty() {
@@ -90,6 +98,7 @@ impl Trace {
                 .segments
                 .iter()
                 .flat_map(|(a, b)| [project(*a), project(*b)])
+                .filter(|(x, y)| x.is_finite() && y.is_finite())
                 .collect();
         }
         let (mut x0, mut x1, mut y0, mut y1) = bounds(&points);
