@@ -1,0 +1,243 @@
+//! Headless demo: runs every scene under every backend and prints one table.
+//!
+//! ```text
+//! cargo run --release --example demo -- [--scene NAME]... [--backend NAME]...
+//!     [--steps N] [--epsilon X] [--json FILE] [--svg DIR]
+//! ```
+//!
+//! `--scene` matches substrings of scene names and may repeat; `--backend`
+//! takes off, rapier or affine and may repeat (default: all three);
+//! `--steps` overrides every scene's step count; `--epsilon` is handed to the
+//! affine backend; `--json` writes the rows to a file; `--svg` writes one
+//! side-view drawing per scene and backend into a folder.
+
+use affine_ccd::scenes::runner::RunError;
+use affine_ccd::scenes::{self, Backend, RunOptions, SceneReport, run_scene};
+use indicatif::{ProgressBar, ProgressStyle};
+use std::io::IsTerminal;
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::time::Instant;
+
+/// The parsed command line.
+#[derive(Debug, Default)]
+struct Args {
+    scenes: Vec<String>,
+    backends: Vec<Backend>,
+    steps: Option<usize>,
+    epsilon: Option<f64>,
+    json: Option<PathBuf>,
+    svg: Option<PathBuf>,
+}
+
+const USAGE: &str = "usage: demo [--scene NAME]... [--backend off|rapier|affine]... \
+[--steps N] [--epsilon X] [--json FILE] [--svg DIR]";
+
+fn parse_args() -> Result<Args, String> {
+    let mut args = Args::default();
+    let mut it = std::env::args().skip(1);
+    while let Some(flag) = it.next() {
+        let mut value = || it.next().ok_or_else(|| format!("{flag} needs a value"));
+        match flag.as_str() {
+            "--scene" => args.scenes.push(value()?),
+            "--backend" => args.backends.push(value()?.parse()?),
+            "--steps" => {
+                let v = value()?;
+                args.steps = Some(
+                    v.parse()
+                        .map_err(|_| format!("--steps: `{v}` is not a count"))?,
+                );
+            }
+            "--epsilon" => {
+                let v = value()?;
+                let eps: f64 = v
+                    .parse()
+                    .map_err(|_| format!("--epsilon: `{v}` is not a number"))?;
+                if !(eps.is_finite() && eps > 0.0) {
+                    return Err(format!("--epsilon must be positive, got {v}"));
+                }
+                args.epsilon = Some(eps);
+            }
+            "--json" => args.json = Some(value()?.into()),
+            "--svg" => args.svg = Some(value()?.into()),
+            "-h" | "--help" => return Err(USAGE.to_string()),
+            other => return Err(format!("unknown option `{other}`\n{USAGE}")),
+        }
+    }
+    if args.backends.is_empty() {
+        args.backends = Backend::ALL.to_vec();
+    }
+    Ok(args)
+}
+
+fn main() -> ExitCode {
+    let args = match parse_args() {
+        Ok(args) => args,
+        Err(message) => {
+            eprintln!("{message}");
+            return ExitCode::from(2);
+        }
+    };
+    let scenes = scenes::find(&args.scenes);
+    if scenes.is_empty() {
+        eprintln!("no scene matches {:?}", args.scenes);
+        return ExitCode::from(2);
+    }
+    if let Some(dir) = &args.svg
+        && let Err(e) = std::fs::create_dir_all(dir)
+    {
+        eprintln!("cannot create {}: {e}", dir.display());
+        return ExitCode::FAILURE;
+    }
+    let mut options = RunOptions {
+        steps: args.steps,
+        trace: args.svg.is_some(),
+        ..RunOptions::default()
+    };
+    options.backend.epsilon = args.epsilon;
+
+    let runs = scenes.len() * args.backends.len();
+    let bar = if std::io::stdout().is_terminal() {
+        let bar = ProgressBar::new(runs as u64);
+        if let Ok(style) = ProgressStyle::with_template("{bar:40} {pos}/{len} {msg}") {
+            bar.set_style(style);
+        }
+        bar
+    } else {
+        ProgressBar::hidden()
+    };
+
+    let started = Instant::now();
+    let mut reports: Vec<SceneReport> = Vec::new();
+    let mut unavailable: Vec<Backend> = Vec::new();
+    for scene in &scenes {
+        for &backend in &args.backends {
+            bar.set_message(format!("{} / {}", scene.name, backend));
+            match run_scene(scene, backend, &options) {
+                Ok(report) => {
+                    if let (Some(dir), Some(trace)) = (&args.svg, &report.trace) {
+                        let path = dir.join(format!("{}-{}.svg", scene.name, backend));
+                        let title = format!(
+                            "{} / {}: {} tunnelling, {} missed, {} deep",
+                            scene.name,
+                            backend,
+                            report.tunnelling,
+                            report.missed_contacts,
+                            report.deep_ends
+                        );
+                        if let Err(e) = std::fs::write(&path, trace.to_svg(&title)) {
+                            bar.suspend(|| eprintln!("cannot write {}: {e}", path.display()));
+                        }
+                    }
+                    reports.push(report);
+                }
+                Err(RunError::Unavailable(b)) => {
+                    if !unavailable.contains(&b) {
+                        unavailable.push(b);
+                    }
+                }
+            }
+            bar.inc(1);
+        }
+    }
+    bar.finish_and_clear();
+
+    print_table(&reports);
+    for backend in &unavailable {
+        println!("{backend}: not built yet");
+    }
+    println!(
+        "{} scenes, {} runs in {:.1} s; CCD ms: n/a = not measurable \
+(rapier times its CCD only with its `profiler` feature), - = no CCD",
+        scenes.len(),
+        reports.len(),
+        started.elapsed().as_secs_f64()
+    );
+    println!(
+        "reproduce: cargo run --release --example demo -- {}",
+        reproduce(&args)
+    );
+
+    if let Some(path) = &args.json
+        && let Err(e) = std::fs::write(path, to_json(&reports))
+    {
+        eprintln!("cannot write {}: {e}", path.display());
+        return ExitCode::FAILURE;
+    }
+    ExitCode::SUCCESS
+}
+
+/// The command-line arguments again, for the "reproduce" line.
+fn reproduce(args: &Args) -> String {
+    let mut parts: Vec<String> = Vec::new();
+    for s in &args.scenes {
+        parts.push(format!("--scene {s}"));
+    }
+    if args.backends != Backend::ALL {
+        for b in &args.backends {
+            parts.push(format!("--backend {b}"));
+        }
+    }
+    if let Some(n) = args.steps {
+        parts.push(format!("--steps {n}"));
+    }
+    if let Some(e) = args.epsilon {
+        parts.push(format!("--epsilon {e}"));
+    }
+    parts.join(" ")
+}
+
+/// The CCD column: milliseconds, `n/a` when not measurable, `-` for `off`.
+fn ccd_cell(report: &SceneReport) -> String {
+    match (report.ccd_ms, report.backend) {
+        (Some(ms), _) => format!("{ms:.2}"),
+        (None, Backend::Off) => "-".to_string(),
+        (None, _) => "n/a".to_string(),
+    }
+}
+
+fn print_table(reports: &[SceneReport]) {
+    let width = reports
+        .iter()
+        .map(|r| r.scene.len())
+        .max()
+        .unwrap_or(5)
+        .max(5);
+    println!(
+        "{:<width$}  {:<7} {:>10} {:>7} {:>5} {:>6} {:>8} {:>8}",
+        "scene", "backend", "tunnelling", "missed", "deep", "steps", "step ms", "CCD ms"
+    );
+    println!("{}", "-".repeat(width + 60));
+    for r in reports {
+        println!(
+            "{:<width$}  {:<7} {:>10} {:>7} {:>5} {:>6} {:>8.3} {:>8}",
+            r.scene,
+            r.backend.name(),
+            r.tunnelling,
+            r.missed_contacts,
+            r.deep_ends,
+            r.steps,
+            r.median_step_ms,
+            ccd_cell(r)
+        );
+    }
+}
+
+fn to_json(reports: &[SceneReport]) -> String {
+    let rows: Vec<serde_json::Value> = reports
+        .iter()
+        .map(|r| {
+            serde_json::json!({
+                "scene": r.scene,
+                "backend": r.backend.name(),
+                "tunnelling_events": r.tunnelling,
+                "missed_contacts": r.missed_contacts,
+                "deep_ends": r.deep_ends,
+                "steps": r.steps,
+                "median_step_ms": r.median_step_ms,
+                "ccd_ms": r.ccd_ms,
+            })
+        })
+        .collect();
+    serde_json::to_string_pretty(&rows).unwrap_or_else(|_| "[]".to_string())
+}

@@ -1,0 +1,103 @@
+//! Every scene under every available backend, judged by both oracles.
+//!
+//! Scenario: each scene is run headless (steps capped at [`MAX_STEPS`] so the
+//! whole test stays well within a minute in release). Assertions:
+//!
+//! - `off` tunnels on every scene built to tunnel, as seen by the scene's
+//!   guards and by the generic contact counter: otherwise the oracle could
+//!   never fail and would prove nothing;
+//! - every backend is clean on the control scene with slow bodies: otherwise
+//!   the oracle reports false alarms.
+//!
+//! Run: `cargo test --release --test scenes -- --nocapture` to see the table.
+
+use affine_ccd::scenes::{self, Backend, RunOptions, SceneReport, run_scene};
+
+/// Upper bound on the steps of any scene in this test.
+const MAX_STEPS: usize = 300;
+
+#[test]
+fn the_oracle_sees_tunnelling_without_ccd_and_nothing_on_slow_scenes() {
+    let started = std::time::Instant::now();
+    let mut reports: Vec<(scenes::Scene, SceneReport)> = Vec::new();
+    let mut failures: Vec<String> = Vec::new();
+    for scene in scenes::all() {
+        for backend in Backend::ALL {
+            let options = RunOptions {
+                steps: Some(scene.steps.min(MAX_STEPS)),
+                ..RunOptions::default()
+            };
+            match run_scene(&scene, backend, &options) {
+                Ok(report) => reports.push((scene, report)),
+                // The affine backend is not wired in yet.
+                Err(e) => println!("{} / {backend}: {e}", scene.name),
+            }
+        }
+    }
+
+    println!(
+        "{:<26} {:<7} {:>10} {:>7} {:>5} {:>6} {:>8}",
+        "scene", "backend", "tunnelling", "missed", "deep", "steps", "step ms"
+    );
+    for (_, r) in &reports {
+        println!(
+            "{:<26} {:<7} {:>10} {:>7} {:>5} {:>6} {:>8.3}",
+            r.scene,
+            r.backend.name(),
+            r.tunnelling,
+            r.missed_contacts,
+            r.deep_ends,
+            r.steps,
+            r.median_step_ms
+        );
+    }
+    println!(
+        "{} runs in {:.1} s",
+        reports.len(),
+        started.elapsed().as_secs_f64()
+    );
+
+    for (scene, r) in &reports {
+        if r.backend == Backend::Off && scene.built_to_tunnel {
+            if r.tunnelling == 0 {
+                failures.push(format!(
+                    "{}: off shows no tunnelling event (missed {}, deep {}): the scene cannot fail",
+                    r.scene, r.missed_contacts, r.deep_ends
+                ));
+            }
+            if r.missed_contacts + r.deep_ends == 0 {
+                failures.push(format!(
+                    "{}: off tunnels ({} events) but the contact counter saw nothing",
+                    r.scene, r.tunnelling
+                ));
+            }
+        }
+        if !scene.built_to_tunnel && !r.is_clean() {
+            failures.push(format!(
+                "{} (control) / {}: {} tunnelling, {} missed, {} deep: expected all zero",
+                r.scene, r.backend, r.tunnelling, r.missed_contacts, r.deep_ends
+            ));
+        }
+    }
+
+    // ---------------------------------------------------------------------
+    // AFFINE ASSERTIONS GO HERE, once `make_stepper(Backend::Affine, ..)`
+    // returns a stepper:
+    //   - for every scene, the affine report has zero tunnelling events,
+    //     zero missed contacts and zero deep ends;
+    //   - for every scene, each affine count ≤ the rapier count.
+    // Until then, check that the affine backend is reported unavailable
+    // rather than silently skipped for another reason.
+    // ---------------------------------------------------------------------
+    let affine_ran = reports.iter().any(|(_, r)| r.backend == Backend::Affine);
+    assert!(
+        !affine_ran,
+        "the affine backend runs now: add its assertions above"
+    );
+
+    assert!(
+        reports.iter().any(|(s, _)| !s.built_to_tunnel),
+        "no control scene in the catalogue"
+    );
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
