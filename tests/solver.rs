@@ -136,7 +136,7 @@ fn linear_balls_match_the_analytic_time_in_every_arithmetic() {
                     );
                 }
                 (Some(t), None) => panic!("{kind:?} case {i}: missed a hit at {t}"),
-                (None, Some(toi)) => {
+                (None, Some(_)) => {
                     false_positives += 1;
                     worst_fp_gap = worst_fp_gap.max(min_gap(case.p, case.d, reach32));
                 }
