@@ -87,19 +87,30 @@ pub trait Trajectory {
     }
 }
 
-/// The constant-rotation part of a motion, prepared once: the angle per
-/// step `|θ|`, and `K = [k]×`, `K² = k·kᵀ − I` for the unit axis `k`. They
-/// are computed in interval arithmetic, then kept as `f64` values plus one
-/// error radius each, so that the per-node work multiplies enclosures by
-/// plain numbers.
+/// The constant-rotation part of a motion, prepared once.
+///
+/// With `K = [k]×` for the unit axis `k` and `K² = k·kᵀ − I`, Rodrigues'
+/// formula gives the frame's rotation and the turned arm from the centre as
+/// `R(τ) = R0 + sin φ·(K·R0) + (1 − cos φ)·(K²·R0)` and
+/// `arm(τ) = arm + sin φ·(K·arm) + (1 − cos φ)·(K²·arm)`, `φ = |θ|·τ`. The
+/// products are computed once in interval arithmetic and kept as `f64`
+/// values plus one error radius per group, so that each node costs two
+/// multiplications of an enclosure by a number per entry.
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct Spin {
     angle: f64,
     angle_err: f64,
-    k: Matrix3<f64>,
-    k2: Matrix3<f64>,
-    /// The largest error radius of any entry of `k` or `k2`.
-    matrix_err: f64,
+    rot_k: Matrix3<f64>,
+    rot_k2: Matrix3<f64>,
+    rot_err: f64,
+    arm_k: Vector3<f64>,
+    arm_k2: Vector3<f64>,
+    arm_err: f64,
+}
+
+/// The radius of an interval about its midpoint, rounded up.
+fn radius(iv: &Interval) -> f64 {
+    up(iv.hi - iv.mid()).max(up(iv.mid() - iv.lo))
 }
 
 impl Spin {
@@ -108,7 +119,7 @@ impl Spin {
     /// distances' own precision) and are treated as none.
     const NEGLIGIBLE: f64 = 1.0e-150;
 
-    fn new(theta: &Vector3<f64>) -> Option<Spin> {
+    fn new(theta: &Vector3<f64>, start: &Matrix3<f64>, arm: &Vector3<f64>) -> Option<Spin> {
         if theta.norm() <= Spin::NEGLIGIBLE {
             return None;
         }
@@ -126,28 +137,45 @@ impl Spin {
                 kk
             }
         });
-        let radius = |iv: &Interval| up(iv.hi - iv.mid()).max(up(iv.mid() - iv.lo));
-        let matrix_err = skew.iter().chain(k2.iter()).map(radius).fold(0.0, f64::max);
+        let start = start.map(Interval::point);
+        let arm = arm.map(Interval::point);
+        let (rot_k, rot_k2) = (skew * start, k2 * start);
+        let (arm_k, arm_k2) = (skew * arm, k2 * arm);
+        let widest = |m: &[Interval]| m.iter().map(radius).fold(0.0, f64::max);
         Some(Spin {
             angle: angle.mid(),
             angle_err: radius(&angle),
-            k: skew.map(|iv| iv.mid()),
-            k2: k2.map(|iv| iv.mid()),
-            matrix_err,
+            rot_err: widest(rot_k.as_slice()).max(widest(rot_k2.as_slice())),
+            rot_k: rot_k.map(|iv| iv.mid()),
+            rot_k2: rot_k2.map(|iv| iv.mid()),
+            arm_err: widest(arm_k.as_slice()).max(widest(arm_k2.as_slice())),
+            arm_k: arm_k.map(|iv| iv.mid()),
+            arm_k2: arm_k2.map(|iv| iv.mid()),
         })
     }
 
-    /// `exp(τ[θ]×) = I + sin φ·K + (1 − cos φ)·K²` over the node.
-    fn matrix<E: Enclosure>(&self, tau: E) -> Matrix3<E> {
+    /// `(sin φ, 1 − cos φ)` over the node, and the sum of their largest
+    /// magnitudes (which scales the prepared products' error radii).
+    fn angle_terms<E: Enclosure>(&self, tau: E) -> (E, E, f64) {
         let phi = (tau * self.angle).widen(up(self.angle_err * tau.range().mag()));
         let (s, cos) = series::sin_cos(phi);
         let c = E::one() - cos;
-        // The entries' own error, times the largest |sin φ| and |1 − cos φ|.
-        let slack = up(self.matrix_err * up(s.range().mag() + c.range().mag()));
+        let mag = up(s.range().mag() + c.range().mag());
+        (s, c, mag)
+    }
+
+    /// `R(τ)` over the node, from `R0` and the angle terms.
+    fn rotation<E: Enclosure>(&self, start: &Matrix3<f64>, s: E, c: E, mag: f64) -> Matrix3<E> {
+        let slack = up(self.rot_err * mag);
         Matrix3::from_fn(|i, j| {
-            let m = (s * self.k[(i, j)] + c * self.k2[(i, j)]).widen(slack);
-            if i == j { m + 1.0 } else { m }
+            (s * self.rot_k[(i, j)] + c * self.rot_k2[(i, j)] + start[(i, j)]).widen(slack)
         })
+    }
+
+    /// The turned arm over the node.
+    fn arm<E: Enclosure>(&self, arm: &Vector3<f64>, s: E, c: E, mag: f64) -> Vector3<E> {
+        let slack = up(self.arm_err * mag);
+        Vector3::from_fn(|i, _| (s * self.arm_k[i] + c * self.arm_k2[i] + arm[i]).widen(slack))
     }
 }
 
@@ -236,7 +264,7 @@ impl Motion {
         check_vector("linear velocity × dt", &displacement)?;
         check_vector("angular velocity × dt", &rotation)?;
         let start_rotation = UnitQuaternion::new_normalize(start.rotation.into_inner());
-        Ok(Motion {
+        let mut motion = Motion {
             center,
             arm: start.translation.vector - center.coords,
             start_rotation,
@@ -245,8 +273,10 @@ impl Motion {
             bend: Vector3::zeros(),
             rotation,
             dt,
-            spin: Spin::new(&rotation),
-        })
+            spin: None,
+        };
+        motion.spin = Spin::new(&rotation, &motion.start_matrix, &motion.arm);
+        Ok(motion)
     }
 
     /// The same motion with a constant linear acceleration `linacc` (m/s²)
@@ -292,7 +322,7 @@ impl Motion {
         let theta = whole_turns(&(q1 * q0.inverse()).scaled_axis(), &(angvel_hint * dt));
         let mut motion = Motion::from_velocities(start, c0, Vector3::zeros(), theta / dt, dt)?;
         motion.rotation = theta;
-        motion.spin = Spin::new(&theta);
+        motion.spin = Spin::new(&theta, &motion.start_matrix, &motion.arm);
         motion.displacement = c1 - c0;
         Ok(motion)
     }
@@ -341,16 +371,6 @@ impl Motion {
         (linear + turning) * (1.0 + 4.0 * f64::EPSILON) + f64::MIN_POSITIVE
     }
 
-    /// The arm from the centre to the frame's origin, turned by `turn`.
-    fn turned_arm<E: Enclosure>(&self, turn: &Matrix3<E>) -> Vector3<E> {
-        if self.arm == Vector3::zeros() {
-            return Vector3::from_element(E::zero());
-        }
-        Vector3::from_fn(|i, _| {
-            turn[(i, 0)] * self.arm.x + turn[(i, 1)] * self.arm.y + turn[(i, 2)] * self.arm.z
-        })
-    }
-
     /// The centre of mass over the node.
     fn center_at<E: Enclosure>(&self, tau: E) -> Vector3<E> {
         let mut c = self.center.coords.map(E::constant);
@@ -395,15 +415,10 @@ impl Trajectory for Motion {
                 translation: center + self.arm.map(E::constant),
             };
         };
-        let turn = spin.matrix(tau);
-        let rotation = Matrix3::from_fn(|i, j| {
-            turn[(i, 0)] * self.start_matrix[(0, j)]
-                + turn[(i, 1)] * self.start_matrix[(1, j)]
-                + turn[(i, 2)] * self.start_matrix[(2, j)]
-        });
+        let (s, c, mag) = spin.angle_terms(tau);
         Pose {
-            rotation,
-            translation: center + self.turned_arm(&turn),
+            rotation: spin.rotation(&self.start_matrix, s, c, mag),
+            translation: center + spin.arm(&self.arm, s, c, mag),
         }
     }
 
@@ -413,7 +428,10 @@ impl Trajectory for Motion {
         match &self.spin {
             None => center + self.arm.map(E::constant),
             Some(_) if self.arm == Vector3::zeros() => center,
-            Some(spin) => center + self.turned_arm(&spin.matrix(tau)),
+            Some(spin) => {
+                let (s, c, mag) = spin.angle_terms(tau);
+                center + spin.arm(&self.arm, s, c, mag)
+            }
         }
     }
 

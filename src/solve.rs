@@ -281,6 +281,31 @@ impl Solver {
                 }
             }
             let (start, end) = (node.start, node.end);
+            if let Some(sure) = node.certain {
+                // A root lies in [clipped.lo, sure]: report when that is
+                // narrow enough, else look there first (the bracket shrinks
+                // quadratically near a simple root; DESIGN.md's "split next
+                // to the left end", guarded by certainty).
+                if sure - clipped.lo <= options.epsilon {
+                    return Ok(SolveOutcome {
+                        status: RootStatus::Hit,
+                        time: clipped.lo,
+                        pair: Some(node.earliest_pair),
+                        stats,
+                    });
+                }
+                self.stack.push(Frame {
+                    span: TimeSpan::new(sure, clipped.hi),
+                    start,
+                    end,
+                });
+                self.stack.push(Frame {
+                    span: TimeSpan::new(clipped.lo, sure),
+                    start,
+                    end,
+                });
+                continue;
+            }
             if clipped.width() < RECLIP_SHARE * frame.span.width() {
                 self.stack.push(Frame {
                     span: clipped,
@@ -403,6 +428,7 @@ impl Solver {
         let mut out = [E::zero(); MAX_AXES];
         // Feasible part of the node in the local symbol e ∈ [−1, 1].
         let (mut e_lo, mut e_hi) = (f64::INFINITY, f64::NEG_INFINITY);
+        let mut e_certain = f64::INFINITY;
         let mut earliest_pair = 0usize;
         // Pairs to look at: the frame's list (left intact for its sibling
         // node), then any sub-pairs that composites expand into.
@@ -424,9 +450,10 @@ impl Solver {
             gaps.eval(pair, span, item.axes, &mut out);
             stats.pair_evaluations += 1;
             stats.axis_evaluations += u64::from(item.axes.count_ones());
-            let Some((axes, lo, hi)) = judge_pair(&out, item.axes) else {
+            let Some(judged) = judge_pair(&out, item.axes) else {
                 continue;
             };
+            let (axes, lo, hi) = (judged.axes, judged.lo, judged.hi);
             self.children.clear();
             if gaps.expand(pair, span, &mut self.children) {
                 for &child in &self.children {
@@ -446,6 +473,9 @@ impl Solver {
                 earliest_pair = pair;
             }
             e_hi = e_hi.max(hi);
+            if let Some(c) = judged.certain {
+                e_certain = e_certain.min(c.max(lo));
+            }
             self.arena.push(Alive {
                 pair: item.pair,
                 axes,
@@ -468,8 +498,13 @@ impl Solver {
             // Rounding crossed the ends over; keep the node whole.
             span
         };
+        // A time by which some pair surely touches, inside the clipped node.
+        let certain = (e_certain <= 1.0)
+            .then(|| to_time(e_certain, 1.0))
+            .filter(|&t| t > clipped.lo && t < clipped.hi);
         Some(Visited {
             span: clipped,
+            certain,
             start: frame.end,
             end: self.arena.len(),
             earliest_pair,
@@ -480,6 +515,8 @@ impl Solver {
 /// A visited node that may hold a root.
 struct Visited {
     span: TimeSpan,
+    /// A time within `span` by which some pair surely touches.
+    certain: Option<f64>,
     start: usize,
     end: usize,
     earliest_pair: usize,
@@ -490,13 +527,26 @@ fn full_mask(n: usize) -> u64 {
     if n >= 64 { u64::MAX } else { (1u64 << n) - 1 }
 }
 
+/// What one evaluation says of a pair that is not proved apart.
+struct Judgement {
+    /// The axes worth keeping on sub-nodes.
+    axes: u64,
+    /// Where in `e ∈ [−1, 1]` every axis's linear lower bound is `≤ 0`
+    /// (empty, `lo > hi`, when the linear bounds alone exclude the node).
+    lo: f64,
+    hi: f64,
+    /// The earliest `e` at which every axis's linear *upper* bound is
+    /// `≤ 0`: by then the pair surely touches (for families whose axes are
+    /// exact), so a root lies in `[lo, certain]`.
+    certain: Option<f64>,
+}
+
 /// Judge one pair from its enclosed axes: `None` when an axis proves it
-/// apart; otherwise the axes worth keeping and the part `[lo, hi]` of
-/// `e ∈ [−1, 1]` where every axis's linear lower bound is `≤ 0` (empty,
-/// `lo > hi`, when the linear bounds alone exclude the node).
-fn judge_pair<E: Enclosure>(out: &[E], axes: u64) -> Option<(u64, f64, f64)> {
+/// apart.
+fn judge_pair<E: Enclosure>(out: &[E], axes: u64) -> Option<Judgement> {
     let mut best_lo = f64::NEG_INFINITY;
     let (mut e_lo, mut e_hi) = (-1.0f64, 1.0f64);
+    let (mut sure_lo, mut sure_hi) = (-1.0f64, 1.0f64);
     let mut ranges = [Interval::point(0.0); MAX_AXES];
     for (k, slot) in ranges.iter_mut().enumerate() {
         if axes >> k & 1 == 0 {
@@ -518,6 +568,15 @@ fn judge_pair<E: Enclosure>(out: &[E], axes: u64) -> Option<(u64, f64, f64)> {
             e_lo = 1.0;
             e_hi = -1.0;
         }
+        // a + b·e ≤ 0 where the axis surely is non-positive (moved inward).
+        let (a, b) = out[k].linear_upper();
+        if b > 0.0 {
+            sure_hi = sure_hi.min(widen_out((-a) / b, -1.0));
+        } else if b < 0.0 {
+            sure_lo = sure_lo.max(widen_out((-a) / b, 1.0));
+        } else if a.is_nan() || a > 0.0 {
+            sure_lo = f64::INFINITY;
+        }
     }
     // An axis whose upper bound is below another's lower bound never
     // separates where that other one does not: drop it.
@@ -527,7 +586,12 @@ fn judge_pair<E: Enclosure>(out: &[E], axes: u64) -> Option<(u64, f64, f64)> {
             kept &= !(1u64 << k);
         }
     }
-    Some((kept, e_lo, e_hi))
+    Some(Judgement {
+        axes: kept,
+        lo: e_lo,
+        hi: e_hi,
+        certain: (sure_lo <= sure_hi).then_some(sure_lo),
+    })
 }
 
 /// A root of the linear bound computed in floats, moved outward (towards

@@ -174,6 +174,10 @@ impl Enclosure for Affine {
         (down(self.c - self.r), self.s)
     }
 
+    fn linear_upper(&self) -> (f64, f64) {
+        (up(self.c + self.r), self.s)
+    }
+
     fn widen(self, radius: f64) -> Affine {
         Affine::checked(self.c, self.s, bound(self.r + radius))
     }

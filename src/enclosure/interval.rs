@@ -236,6 +236,10 @@ impl Enclosure for Interval {
         (self.lo, 0.0)
     }
 
+    fn linear_upper(&self) -> (f64, f64) {
+        (self.hi, 0.0)
+    }
+
     fn widen(self, radius: f64) -> Interval {
         Interval::outward(self.lo - radius, self.hi + radius)
     }

@@ -167,6 +167,12 @@ pub trait Enclosure:
     /// Intervals give `(lo, 0)`.
     fn linear_lower(&self) -> (f64, f64);
 
+    /// `(a, b)` such that the enclosed function is `≤ a + b·e` for every
+    /// `e ∈ [−1, 1]`: where this is `≤ 0` the function surely is too. The
+    /// solver uses it to find a time by which a pair surely touches.
+    /// Intervals give `(hi, 0)`.
+    fn linear_upper(&self) -> (f64, f64);
+
     /// The enclosure widened by `± radius` (`radius ≥ 0`).
     fn widen(self, radius: f64) -> Self;
 

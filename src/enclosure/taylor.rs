@@ -344,6 +344,14 @@ impl<const K: usize> Enclosure for Taylor<K> {
         (a, self.c[1])
     }
 
+    fn linear_upper(&self) -> (f64, f64) {
+        let mut a = up(self.c[0] + self.r);
+        for k in 2..K {
+            a = up(a + Self::term_bounds(k, self.c[k]).1);
+        }
+        (a, self.c[1])
+    }
+
     fn widen(self, radius: f64) -> Taylor<K> {
         Taylor::checked(self.c, add_up(self.r, radius))
     }
