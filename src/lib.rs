@@ -14,6 +14,7 @@
 pub mod enclosure;
 pub mod error;
 pub mod motion;
+pub mod rapier;
 pub mod solve;
 
 pub use enclosure::{Affine, Arithmetic, Enclosure, Interval, Taylor, Taylor2, Taylor3, TimeSpan};
