@@ -17,6 +17,7 @@ pub mod error;
 pub(crate) mod gap;
 pub mod motion;
 pub mod query;
+pub mod rapier;
 pub mod scenes;
 pub mod solve;
 pub mod truth;

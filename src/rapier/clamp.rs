@@ -1,0 +1,51 @@
+//! Applying an impact: the body goes back to its pose at the reported time.
+//!
+//! The time already includes the skin (the query reports when the gap
+//! reaches it), so the clamped body is a skin away from what it would hit.
+//! Velocities are kept: the next step's speculative contacts stop the body,
+//! as with rapier's own CCD.
+
+use super::convert::{iso_from_pose, point_from_glam, pose_from_iso, vec_from_glam};
+use super::select::Moved;
+use crate::error::CcdError;
+use crate::motion::{Motion, Trajectory};
+use rapier3d::prelude::{ColliderSet, RigidBodySet};
+
+/// Moves the body to its pose at `fraction` of its motion over the step.
+/// `set_position` marks it modified, so rapier resyncs its colliders and
+/// broad-phase boxes at the next step's start; call
+/// [`sync_colliders`] once after all clamps for queries in between.
+pub(crate) fn clamp(
+    bodies: &mut RigidBodySet,
+    body: &Moved,
+    fraction: f64,
+    dt: f64,
+) -> Result<(), CcdError> {
+    let Some(rb) = bodies.get(body.handle) else {
+        return Ok(());
+    };
+    let motion = Motion::from_poses(
+        iso_from_pose(&body.start),
+        iso_from_pose(&body.end),
+        point_from_glam(rb.local_center_of_mass()),
+        dt,
+        vec_from_glam(body.angvel),
+    )?;
+    let pose = pose_from_iso(&motion.pose_at(fraction));
+    if !pose.is_finite() {
+        return Err(CcdError::NonFinite {
+            what: "clamped pose",
+            value: f64::NAN,
+        });
+    }
+    if let Some(rb) = bodies.get_mut(body.handle) {
+        rb.set_position(pose, true);
+    }
+    Ok(())
+}
+
+/// Brings the colliders of clamped bodies to their new poses now, so that
+/// scene queries and reads between steps see them.
+pub(crate) fn sync_colliders(bodies: &RigidBodySet, colliders: &mut ColliderSet) {
+    bodies.propagate_modified_body_positions_to_colliders(colliders);
+}

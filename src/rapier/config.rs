@@ -1,0 +1,87 @@
+//! What the CCD stage does, as plain serialisable data.
+
+use crate::enclosure::Arithmetic;
+use serde::{Deserialize, Serialize};
+
+/// Mirror of [`Arithmetic`] for serde: the core type stays free of serde.
+#[derive(Serialize, Deserialize)]
+#[serde(remote = "Arithmetic", rename_all = "lowercase")]
+enum ArithmeticDef {
+    Interval,
+    Affine,
+    Taylor2,
+    Taylor3,
+}
+
+/// Which kinds of collider a fast dynamic body is swept against. A collider
+/// without a parent body counts as fixed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct SweepTargets {
+    pub fixed: bool,
+    pub kinematic: bool,
+    /// Other dynamic bodies, with their own motion over the step (fast ones
+    /// both ways).
+    pub dynamic: bool,
+}
+
+impl Default for SweepTargets {
+    /// Everything a dynamic body can collide with.
+    fn default() -> SweepTargets {
+        SweepTargets {
+            fixed: true,
+            kinematic: true,
+            dynamic: true,
+        }
+    }
+}
+
+/// Settings of [`AffineCcd`](super::AffineCcd).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct CcdConfig {
+    /// Accuracy of each time of impact, a fraction of the step: a clamp
+    /// lands at most this much before the true contact.
+    pub epsilon: f64,
+    /// Metres left between a clamped body and what it hit. Used as
+    /// `min(skin, ½·prediction distance)` so the next step's speculative
+    /// contacts see the pair (rapier's prediction distance is 2 mm by
+    /// default).
+    pub skin: f64,
+    #[serde(with = "ArithmeticDef")]
+    pub arithmetic: Arithmetic,
+    /// Evaluation budget per swept collider per step. When it runs out the
+    /// body is clamped at the earliest time not yet excluded (never a miss).
+    pub max_evaluations: u64,
+    /// A body is swept when its fastest point moves more than this share
+    /// of its thinnest extent in the step (rapier uses 0.5).
+    pub fast_factor: f64,
+    pub targets: SweepTargets,
+    /// Per-body opt-out: a dynamic body whose `RigidBody::user_data` has
+    /// this bit (0–127) set is never swept or clamped (it still serves as
+    /// a target). `None`: no opt-out. A bit, not a handle set, so the choice
+    /// lives with the body and survives snapshots.
+    pub opt_out_bit: Option<u8>,
+}
+
+impl Default for CcdConfig {
+    fn default() -> CcdConfig {
+        CcdConfig {
+            epsilon: 1.0e-4,
+            skin: 1.0e-3,
+            arithmetic: Arithmetic::default(),
+            max_evaluations: 100_000,
+            fast_factor: 0.5,
+            targets: SweepTargets::default(),
+            opt_out_bit: None,
+        }
+    }
+}
+
+impl CcdConfig {
+    /// True when `user_data` opts its body out of the stage.
+    pub fn opted_out(&self, user_data: u128) -> bool {
+        self.opt_out_bit
+            .is_some_and(|bit| bit < 128 && user_data & (1u128 << bit) != 0)
+    }
+}

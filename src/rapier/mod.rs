@@ -1,0 +1,358 @@
+//! affine-ccd as rapier3d 0.36's continuous collision detection.
+//!
+//! ```no_run
+//! use affine_ccd::rapier::AffineCcd;
+//! use rapier3d::prelude::PhysicsWorld;
+//!
+//! let mut world = PhysicsWorld::default();
+//! let mut ccd = AffineCcd::default();
+//! ccd.install(&mut world); // our dispatcher in, built-in CCD off
+//! for _ in 0..60 {
+//!     ccd.step(&mut world); // instead of world.step()
+//! }
+//! ```
+//!
+//! Rapier 0.36 has no hook between its velocity solve and the position
+//! commit, and its CCD asks the query dispatcher only for a few pairs, so
+//! the stage wraps the step: record the poses, let rapier step (its CCD
+//! off), then sweep the bodies that moved fast enough to tunnel from their
+//! old to their new pose and put each back to its pose just before its
+//! first impact (velocities kept). A step without fast bodies touches
+//! nothing. Not done yet: splitting the step at the first impact (rapier's
+//! `max_ccd_substeps > 1`); targets are swept with their unclamped motion.
+
+mod candidates;
+mod clamp;
+pub mod config;
+pub mod dispatcher;
+pub mod report;
+mod select;
+mod sweep;
+
+use crate::{convert, query};
+
+pub use config::{CcdConfig, SweepTargets};
+pub use dispatcher::AffineDispatcher;
+pub use report::{CcdHitEvent, CcdReport, SkipReason, SkippedBody};
+
+use crate::enclosure::TimeSpan;
+use candidates::{Motions, Scene};
+use query::QueryOptions;
+use rapier3d::prelude::{
+    BroadPhaseBvh, CCDSolver, ColliderSet, CollisionEvent, CollisionEventFlags, EventHandler,
+    ImpulseJointSet, IntegrationParameters, IslandManager, MultibodyJointSet, NarrowPhase,
+    PhysicsHooks, PhysicsPipeline, PhysicsWorld, RigidBodySet, SoftBodySet, Vector,
+};
+use select::{Moved, Start};
+use std::time::Instant;
+use sweep::{SensorPair, Workspace};
+
+/// The CCD stage: configuration, buffers and the last step's report.
+#[derive(Default)]
+pub struct AffineCcd {
+    config: CcdConfig,
+    report: CcdReport,
+    starts: Vec<Start>,
+    moved: Vec<Moved>,
+    workspace: Workspace,
+    /// Handed to rapier's step, which wants one; unused with
+    /// `max_ccd_substeps = 0`.
+    unused_ccd: CCDSolver,
+}
+
+impl AffineCcd {
+    pub fn new(config: CcdConfig) -> AffineCcd {
+        AffineCcd {
+            config,
+            ..AffineCcd::default()
+        }
+    }
+
+    pub fn config(&self) -> &CcdConfig {
+        &self.config
+    }
+
+    pub fn config_mut(&mut self) -> &mut CcdConfig {
+        &mut self.config
+    }
+
+    /// What the last step did.
+    pub fn report(&self) -> &CcdReport {
+        &self.report
+    }
+
+    /// The query options of this configuration (skin in metres).
+    fn options(&self, params: &IntegrationParameters) -> QueryOptions {
+        QueryOptions {
+            epsilon: self.config.epsilon,
+            skin: self
+                .config
+                .skin
+                .min(0.5 * params.prediction_distance() as f64)
+                .max(0.0),
+            arithmetic: self.config.arithmetic,
+            max_evaluations: self.config.max_evaluations,
+            time_range: TimeSpan::STEP,
+            // Pairs touching at the start are handled one by one in
+            // `sweep::earliest`.
+            initial_contact: crate::InitialContact::Report,
+        }
+    }
+
+    /// A dispatcher answering shape casts with this configuration.
+    pub fn dispatcher(&self) -> AffineDispatcher {
+        AffineDispatcher::new(QueryOptions {
+            skin: 0.0,
+            ..self.options(&IntegrationParameters::default())
+        })
+    }
+
+    /// Puts our dispatcher (chained to parry's) in the world's narrow phase
+    /// and turns rapier's own CCD off (`max_ccd_substeps = 0`).
+    pub fn install(&self, world: &mut PhysicsWorld) {
+        world
+            .narrow_phase
+            .set_query_dispatcher(self.dispatcher().chained());
+        world.integration_parameters.max_ccd_substeps = 0;
+    }
+
+    /// One step of the world with the CCD stage, no hooks, no events.
+    pub fn step(&mut self, world: &mut PhysicsWorld) -> &CcdReport {
+        self.step_with_events(world, &(), &())
+    }
+
+    /// One step of the world with the CCD stage.
+    pub fn step_with_events(
+        &mut self,
+        world: &mut PhysicsWorld,
+        hooks: &dyn PhysicsHooks,
+        events: &dyn EventHandler,
+    ) -> &CcdReport {
+        self.step_pipeline(
+            &mut world.physics_pipeline,
+            world.gravity,
+            &world.integration_parameters,
+            &mut world.islands,
+            &mut world.broad_phase,
+            &mut world.narrow_phase,
+            &mut world.bodies,
+            &mut world.colliders,
+            &mut world.impulse_joints,
+            &mut world.multibody_joints,
+            &mut world.soft_bodies,
+            hooks,
+            events,
+        )
+    }
+
+    /// What `PhysicsPipeline::step` takes, minus the `CCDSolver`. Rapier's
+    /// CCD is off for this step whatever `max_ccd_substeps` says.
+    #[allow(clippy::too_many_arguments)]
+    pub fn step_pipeline(
+        &mut self,
+        pipeline: &mut PhysicsPipeline,
+        gravity: Vector,
+        integration_parameters: &IntegrationParameters,
+        islands: &mut IslandManager,
+        broad_phase: &mut BroadPhaseBvh,
+        narrow_phase: &mut NarrowPhase,
+        bodies: &mut RigidBodySet,
+        colliders: &mut ColliderSet,
+        impulse_joints: &mut ImpulseJointSet,
+        multibody_joints: &mut MultibodyJointSet,
+        soft_bodies: &mut SoftBodySet,
+        hooks: &dyn PhysicsHooks,
+        events: &dyn EventHandler,
+    ) -> &CcdReport {
+        let clock = Instant::now();
+        self.report = CcdReport::default();
+        select::record(bodies, &self.config, &mut self.report, &mut self.starts);
+        let mut elapsed = clock.elapsed();
+
+        let mut params = *integration_parameters;
+        params.max_ccd_substeps = 0;
+        pipeline.step(
+            gravity,
+            &params,
+            islands,
+            broad_phase,
+            narrow_phase,
+            bodies,
+            colliders,
+            impulse_joints,
+            multibody_joints,
+            soft_bodies,
+            &mut self.unused_ccd,
+            hooks,
+            events,
+        );
+
+        let clock = Instant::now();
+        for &h in pipeline.quarantine().bodies() {
+            self.report.skip(h, SkipReason::NonFinite);
+        }
+        let dt = params.dt as f64;
+        if dt > 0.0 {
+            select::moved(
+                &self.starts,
+                bodies,
+                colliders,
+                dt,
+                &self.config,
+                &mut self.report,
+                &mut self.moved,
+            );
+            if self.moved.iter().any(|m| m.fast) {
+                let opts = self.options(&params);
+                let scene = Scene {
+                    bodies,
+                    colliders,
+                    joints: impulse_joints,
+                    hooks,
+                    config: &self.config,
+                };
+                let plan = sweep_all(
+                    &scene,
+                    broad_phase,
+                    narrow_phase,
+                    &self.moved,
+                    dt,
+                    &opts,
+                    &mut self.workspace,
+                    &mut self.report,
+                );
+                self.apply(plan, bodies, colliders, dt, &opts, events);
+            }
+        }
+        elapsed += clock.elapsed();
+        self.report.elapsed = elapsed;
+        &self.report
+    }
+
+    /// Clamps the hit bodies, then reports the sensors crossed before each
+    /// body's stop.
+    fn apply(
+        &mut self,
+        plan: Plan,
+        bodies: &mut RigidBodySet,
+        colliders: &mut ColliderSet,
+        dt: f64,
+        opts: &QueryOptions,
+        events: &dyn EventHandler,
+    ) {
+        let mut stops = std::collections::HashMap::new();
+        for (i, hit) in &plan.hits {
+            let body = &self.moved[*i];
+            match clamp::clamp(bodies, body, hit.toi.fraction, dt) {
+                Ok(()) => {
+                    stops.insert(body.handle, hit.toi.fraction);
+                    self.report.hits.push(CcdHitEvent {
+                        body: body.handle,
+                        collider1: hit.collider1,
+                        collider2: hit.collider2,
+                        fraction: hit.toi.fraction,
+                        time: hit.toi.fraction * dt,
+                        point: convert::glam_from_vec(&hit.toi.witness1.coords),
+                        normal: convert::glam_from_vec(&hit.toi.normal1),
+                    });
+                }
+                Err(e) => self
+                    .report
+                    .skip(body.handle, SkipReason::Query(e.to_string())),
+            }
+        }
+        if !plan.hits.is_empty() {
+            clamp::sync_colliders(bodies, colliders);
+        }
+        for pair in &plan.sensors {
+            let Some(body) = colliders[pair.collider1].parent() else {
+                continue;
+            };
+            let until = stops.get(&body).copied().unwrap_or(1.0);
+            let (s1, s2) = (
+                colliders[pair.collider1].shape(),
+                colliders[pair.collider2].shape(),
+            );
+            match sweep::first_crossing(s1, pair, s2, until, opts) {
+                Ok(Some(_)) if !touches_at(s1, pair, s2, until) => {
+                    self.report.sensor_crossings += 1;
+                    for event in [CollisionEvent::Started, CollisionEvent::Stopped] {
+                        let e = event(pair.collider1, pair.collider2, CollisionEventFlags::SENSOR);
+                        events.handle_collision_event(bodies, colliders, e, None);
+                    }
+                }
+                Ok(_) => {}
+                Err(e) => self.report.skip(body, SkipReason::Query(e.to_string())),
+            }
+        }
+    }
+}
+
+/// True when the pair overlaps with the body at `until` and the target at
+/// its end: rapier's narrow phase then reports it itself.
+fn touches_at(
+    s1: &dyn rapier3d::parry::shape::Shape,
+    pair: &SensorPair,
+    s2: &dyn rapier3d::parry::shape::Shape,
+    until: f64,
+) -> bool {
+    use crate::motion::Trajectory;
+    use rapier3d::parry::query::{DefaultQueryDispatcher, QueryDispatcher};
+    let p1 = convert::pose_from_iso(&pair.motion1.pose_at(until));
+    let p2 = convert::pose_from_iso(&pair.motion2.pose_at(1.0));
+    DefaultQueryDispatcher
+        .intersection_test(&p1.inv_mul(&p2), s1, s2)
+        .is_ok_and(|i| i.intersecting)
+}
+
+/// What the sweeps found, applied after all of them (so that the order of
+/// the bodies does not matter).
+struct Plan {
+    /// Index into the moved bodies, and the body's earliest impact.
+    hits: Vec<(usize, sweep::BodyHit)>,
+    sensors: Vec<SensorPair>,
+}
+
+#[allow(clippy::too_many_arguments)]
+fn sweep_all(
+    scene: &Scene,
+    broad_phase: &BroadPhaseBvh,
+    narrow_phase: &NarrowPhase,
+    moved: &[Moved],
+    dt: f64,
+    opts: &QueryOptions,
+    ws: &mut Workspace,
+    report: &mut CcdReport,
+) -> Plan {
+    let motions = Motions::new(moved, dt);
+    let dispatcher = narrow_phase.query_dispatcher();
+    let mut plan = Plan {
+        hits: Vec::new(),
+        sensors: Vec::new(),
+    };
+    ws.motions.clear();
+    for (i, body) in moved.iter().enumerate().filter(|(_, m)| m.fast) {
+        report.bodies_swept += 1;
+        let mut sensors = Vec::new();
+        match sweep::sweep_body(
+            scene,
+            broad_phase,
+            dispatcher,
+            &motions,
+            body,
+            opts,
+            ws,
+            report,
+            &mut sensors,
+        ) {
+            Ok(hit) => {
+                if let Some(hit) = hit {
+                    plan.hits.push((i, hit));
+                }
+                plan.sensors.append(&mut sensors);
+            }
+            Err(e) => report.skip(body.handle, SkipReason::Query(e.to_string())),
+        }
+    }
+    plan
+}

@@ -1,0 +1,76 @@
+//! What one step of the CCD stage did: counts, clamps and skipped bodies.
+
+use rapier3d::prelude::{ColliderHandle, RigidBodyHandle, Vector};
+use std::time::Duration;
+
+/// One clamp: a fast body stopped short of a collider.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CcdHitEvent {
+    pub body: RigidBodyHandle,
+    /// The body's collider that would have hit first.
+    pub collider1: ColliderHandle,
+    /// What it would have hit.
+    pub collider2: ColliderHandle,
+    /// When, as a fraction of the step.
+    pub fraction: f64,
+    /// When, seconds from the start of the step.
+    pub time: f64,
+    /// Contact point on `collider1` at the hit, world, metres.
+    pub point: Vector,
+    /// Contact normal at the hit, world, unit, from `collider1` towards
+    /// `collider2`.
+    pub normal: Vector,
+}
+
+/// Why a body that might have needed a sweep was left alone this step.
+#[derive(Clone, Debug, PartialEq)]
+pub enum SkipReason {
+    /// Its pose or velocity was NaN or infinite (before or after the step).
+    NonFinite,
+    /// It was asleep or absent before the step and moved during it: no
+    /// start pose was recorded.
+    NoStartPose,
+    /// The time-of-impact query failed; the message says why.
+    Query(String),
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct SkippedBody {
+    pub body: RigidBodyHandle,
+    pub reason: SkipReason,
+}
+
+/// The CCD stage's account of one step.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct CcdReport {
+    /// Fast bodies swept.
+    pub bodies_swept: usize,
+    /// Collider pairs handed to the time-of-impact query.
+    pub pairs: usize,
+    /// Pairs already within the skin at the start of the step, left to
+    /// rapier's contacts (penetrating) or re-asked with a smaller skin.
+    pub pairs_touching_at_start: usize,
+    /// Pair evaluations the query spent.
+    pub evaluations: u64,
+    /// One event per clamped body.
+    pub hits: Vec<CcdHitEvent>,
+    /// Sensor crossings inside the step reported as Started + Stopped.
+    pub sensor_crossings: usize,
+    pub skipped: Vec<SkippedBody>,
+    /// Time spent in the stage (recording, selection, queries, clamps),
+    /// rapier's own step excluded.
+    pub elapsed: Duration,
+}
+
+impl CcdReport {
+    /// Number of bodies clamped.
+    pub fn clamps(&self) -> usize {
+        self.hits.len()
+    }
+
+    pub(crate) fn skip(&mut self, body: RigidBodyHandle, reason: SkipReason) {
+        if !self.skipped.iter().any(|s| s.body == body) {
+            self.skipped.push(SkippedBody { body, reason });
+        }
+    }
+}

@@ -1,0 +1,153 @@
+//! Which bodies moved, and which of them can tunnel.
+//!
+//! Before the step we record the pose of every awake, enabled, non-fixed
+//! body (targets that move need their start pose too). After it we keep the
+//! dynamic ones whose fastest point went farther than `fast_factor` times
+//! their thinnest extent: rapier's post-solve test, with the rotation
+//! counted as an arc (whole turns included, through the velocity term)
+//! instead of a chord. Everything here reads bodies, never writes them,
+//! so a step with no fast body leaves rapier's state untouched.
+
+use super::config::CcdConfig;
+use super::report::{CcdReport, SkipReason};
+use rapier3d::parry::shape::{Shape, TypedShape};
+use rapier3d::prelude::{ColliderSet, Pose, RigidBody, RigidBodyHandle, RigidBodySet, Vector};
+use std::f64::consts::PI;
+
+/// A body's state before the step.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Start {
+    pub handle: RigidBodyHandle,
+    pub pose: Pose,
+}
+
+/// A body that moved during the step.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Moved {
+    pub handle: RigidBodyHandle,
+    pub start: Pose,
+    pub end: Pose,
+    /// Angular velocity after the solve, rad/s: chooses the whole turns.
+    pub angvel: Vector,
+    /// A dynamic body, not opted out, fast enough to tunnel.
+    pub fast: bool,
+    /// Bound on how far any point of the body travels during the step,
+    /// metres (for enlarging broad-phase queries).
+    pub travel: f64,
+}
+
+fn finite_vels(rb: &RigidBody) -> bool {
+    rb.linvel().is_finite() && rb.angvel().is_finite()
+}
+
+/// The poses of the bodies that may move during the next step. Dynamic
+/// bodies with a non-finite state are reported and left out.
+pub(crate) fn record(
+    bodies: &RigidBodySet,
+    config: &CcdConfig,
+    report: &mut CcdReport,
+    out: &mut Vec<Start>,
+) {
+    out.clear();
+    for (handle, rb) in bodies.iter() {
+        if rb.is_fixed() || !rb.is_enabled() || rb.is_sleeping() {
+            continue;
+        }
+        if !rb.position().is_finite() || !finite_vels(rb) {
+            if rb.is_dynamic() && !config.opted_out(rb.user_data) {
+                report.skip(handle, SkipReason::NonFinite);
+            }
+            continue;
+        }
+        out.push(Start {
+            handle,
+            pose: *rb.position(),
+        });
+    }
+}
+
+/// The thinnest extent rapier's test compares the motion with, metres.
+/// Meshes, polylines and heightfields have no thickness in parry (0); they
+/// get their local box's smallest half extent instead, so that a slowly
+/// moving mesh body is not swept every step.
+pub(crate) fn thickness(shape: &dyn Shape) -> f64 {
+    match shape.as_typed_shape() {
+        TypedShape::TriMesh(_)
+        | TypedShape::Polyline(_)
+        | TypedShape::HeightField(_)
+        | TypedShape::Voxels(_) => shape.compute_local_aabb().half_extents().min_element() as f64,
+        _ => shape.ccd_thickness() as f64,
+    }
+}
+
+fn body_thickness(rb: &RigidBody, colliders: &ColliderSet) -> f64 {
+    rb.colliders()
+        .iter()
+        .filter_map(|h| colliders.get(*h))
+        .filter(|co| co.is_enabled())
+        .map(|co| thickness(co.shape()))
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// Bound on the rotation angle (radians) of the motion
+/// `Motion::from_poses` builds: the short angle between the poses unless the
+/// velocity hint may pick other whole turns, then at most `hint + π`.
+fn angle_bound(short: f64, hint: f64) -> f64 {
+    if short + hint < PI { short } else { hint + PI }
+}
+
+/// The shortest rotation angle from `start` to `end`, radians.
+fn angle_short(start: &Pose, end: &Pose) -> f64 {
+    let dq = end.rotation * start.rotation.inverse();
+    2.0 * (dq.xyz().length() as f64).atan2(dq.w.abs() as f64)
+}
+
+/// The bodies of `starts` that moved, each marked fast or not. A body
+/// whose end state is not finite is reported and left out.
+pub(crate) fn moved(
+    starts: &[Start],
+    bodies: &RigidBodySet,
+    colliders: &ColliderSet,
+    dt: f64,
+    config: &CcdConfig,
+    report: &mut CcdReport,
+    out: &mut Vec<Moved>,
+) {
+    out.clear();
+    for start in starts {
+        let Some(rb) = bodies.get(start.handle) else {
+            continue;
+        };
+        if !rb.is_enabled() {
+            continue;
+        }
+        let end = *rb.position();
+        if !end.is_finite() || !finite_vels(rb) {
+            report.skip(start.handle, SkipReason::NonFinite);
+            continue;
+        }
+        if end == start.pose {
+            continue;
+        }
+        let com = rb.local_center_of_mass();
+        let shift = (end * com - start.pose * com).length() as f64;
+        let extent = rb.mass_properties().max_extent() as f64;
+        let spin = rb.angvel().length() as f64 * dt;
+        let short = angle_short(&start.pose, &end);
+        let travel = (shift + extent * angle_bound(short, spin).min(2.0)) * (1.0 + 1.0e-4) + 1.0e-6;
+        // Arc length of the farthest point; the velocity term is rapier's.
+        let arc = shift + extent * short.max(spin);
+        let by_velocity = (rb.linvel().length() as f64 + rb.angvel().length() as f64 * extent) * dt;
+        let fast = rb.is_dynamic()
+            && !config.opted_out(rb.user_data)
+            && arc.max(by_velocity) > config.fast_factor * body_thickness(rb, colliders);
+        out.push(Moved {
+            handle: start.handle,
+            start: start.pose,
+            end,
+            angvel: rb.angvel(),
+            fast,
+            travel,
+        });
+    }
+}

@@ -1,0 +1,230 @@
+//! One fast body's earliest impact over the step, and the sensors it
+//! crosses before it. Every call to the time-of-impact query is in
+//! [`earliest`] and [`first_crossing`].
+
+use super::candidates::{Candidate, Motions, PairKind, Scene, gather, swept_aabb};
+use super::convert::pose_from_iso;
+use super::query::{QueryOptions, ShapeMotion, Toi, time_of_impact, time_of_impact_many};
+use super::report::CcdReport;
+use super::select::Moved;
+use crate::enclosure::TimeSpan;
+use crate::error::CcdError;
+use crate::motion::{Motion, Trajectory};
+use crate::solve::RootStatus;
+use rapier3d::parry::query::{DefaultQueryDispatcher, QueryDispatcher};
+use rapier3d::parry::shape::Shape;
+use rapier3d::prelude::{BroadPhaseBvh, ColliderHandle};
+use std::collections::HashMap;
+
+/// The earliest solid impact of one fast body.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct BodyHit {
+    pub toi: Toi,
+    pub collider1: ColliderHandle,
+    pub collider2: ColliderHandle,
+}
+
+/// A sensor pair the body's sweep may cross, checked once the body's own
+/// stop is known.
+pub(crate) struct SensorPair {
+    pub collider1: ColliderHandle,
+    pub collider2: ColliderHandle,
+    pub motion1: Motion,
+    pub motion2: Motion,
+}
+
+/// Reused buffers; `motions` caches target motions for one step (clear it
+/// between steps).
+#[derive(Default)]
+pub(crate) struct Workspace {
+    candidates: Vec<Candidate>,
+    pub motions: HashMap<ColliderHandle, Motion>,
+}
+
+/// Gap at the start of the step, metres (`None` when parry cannot tell).
+fn start_gap(s1: &dyn Shape, m1: &Motion, s2: &dyn Shape, m2: &Motion) -> Option<f64> {
+    let p1 = pose_from_iso(&m1.pose_at(0.0));
+    let p2 = pose_from_iso(&m2.pose_at(0.0));
+    DefaultQueryDispatcher
+        .distance(&p1.inv_mul(&p2), s1, s2)
+        .ok()
+        .map(|d| d.distance as f64)
+}
+
+/// Earliest impact of `moving` against `targets`, all pairs in one search.
+///
+/// A pair already within the skin at the start is taken out of the joint
+/// search: if it is apart it is asked again alone with half its start gap
+/// as skin (it may close that much, not more); if it touches it is left to
+/// rapier's contacts, as an impact at τ = 0 would freeze a body resting or
+/// sliding on the ground.
+fn earliest(
+    moving: &ShapeMotion,
+    targets: &[ShapeMotion],
+    opts: &QueryOptions,
+    report: &mut CcdReport,
+) -> Result<Option<(Toi, usize)>, CcdError> {
+    let mut alive: Vec<usize> = (0..targets.len()).collect();
+    let mut best: Option<(Toi, usize)> = None;
+    let keep = |toi: Toi, j: usize, best: &mut Option<(Toi, usize)>| {
+        if best.is_none_or(|(b, _)| toi.fraction < b.fraction) {
+            *best = Some((toi, j));
+        }
+    };
+    while !alive.is_empty() {
+        let set: Vec<ShapeMotion> = alive
+            .iter()
+            .map(|&j| ShapeMotion {
+                shape: targets[j].shape,
+                motion: targets[j].motion,
+            })
+            .collect();
+        let found = time_of_impact_many(std::slice::from_ref(moving), &set, opts)?;
+        let Some(many) = found else { break };
+        report.evaluations += many.toi.stats.pair_evaluations;
+        let j = alive[many.target];
+        if many.toi.status != RootStatus::InitiallyTouching {
+            keep(many.toi, j, &mut best);
+            break;
+        }
+        report.pairs_touching_at_start += 1;
+        alive.remove(many.target);
+        let t = &targets[j];
+        let Some(gap) = start_gap(moving.shape, &moving.motion, t.shape, &t.motion) else {
+            continue;
+        };
+        if gap > 0.0 {
+            let alone = QueryOptions {
+                skin: 0.5 * gap.min(opts.skin),
+                ..*opts
+            };
+            if let Some(toi) =
+                time_of_impact(moving.shape, &moving.motion, t.shape, &t.motion, &alone)?
+            {
+                report.evaluations += toi.stats.pair_evaluations;
+                if toi.status != RootStatus::InitiallyTouching {
+                    keep(toi, j, &mut best);
+                }
+            }
+        }
+    }
+    Ok(best)
+}
+
+/// When a sensor pair first touches before `until` (a fraction of the
+/// step), if it is apart at the start.
+pub(crate) fn first_crossing(
+    s1: &dyn Shape,
+    pair: &SensorPair,
+    s2: &dyn Shape,
+    until: f64,
+    opts: &QueryOptions,
+) -> Result<Option<f64>, CcdError> {
+    let opts = QueryOptions {
+        skin: 0.0,
+        time_range: TimeSpan::new(0.0, until),
+        ..*opts
+    };
+    Ok(time_of_impact(s1, &pair.motion1, s2, &pair.motion2, &opts)?
+        .filter(|t| t.status != RootStatus::InitiallyTouching)
+        .map(|t| t.fraction))
+}
+
+/// Sweeps every enabled collider of `body`: the earliest solid impact, and
+/// the sensor pairs to check afterwards (pushed to `sensors`).
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn sweep_body(
+    scene: &Scene,
+    broad_phase: &BroadPhaseBvh,
+    dispatcher: &dyn QueryDispatcher,
+    motions: &Motions,
+    body: &Moved,
+    opts: &QueryOptions,
+    ws: &mut Workspace,
+    report: &mut CcdReport,
+    sensors: &mut Vec<SensorPair>,
+) -> Result<Option<BodyHit>, CcdError> {
+    let Some(rb) = scene.bodies.get(body.handle) else {
+        return Ok(None);
+    };
+    let mut best: Option<BodyHit> = None;
+    for &h1 in rb.colliders() {
+        let Some(co1) = scene.colliders.get(h1).filter(|c| c.is_enabled()) else {
+            continue;
+        };
+        let motion1 = motions.collider(co1, scene.bodies)?;
+        let swept = swept_aabb(co1.shape(), &motion1, co1.position());
+        let mut failure = None;
+        let cache = &mut ws.motions;
+        gather(
+            scene,
+            broad_phase,
+            dispatcher,
+            motions,
+            h1,
+            co1,
+            &swept,
+            |h2, co2| match cache
+                .get(&h2)
+                .copied()
+                .map(Ok)
+                .unwrap_or_else(|| motions.collider(co2, scene.bodies))
+            {
+                Ok(m) => {
+                    cache.insert(h2, m);
+                    Some(swept_aabb(co2.shape(), &m, co2.position()))
+                }
+                Err(e) => {
+                    failure = Some(e);
+                    None
+                }
+            },
+            &mut ws.candidates,
+        );
+        if let Some(e) = failure {
+            return Err(e);
+        }
+        let mut solid = Vec::new();
+        let mut handles = Vec::new();
+        for c in &ws.candidates {
+            let co2 = &scene.colliders[c.handle];
+            let motion2 = match ws.motions.get(&c.handle) {
+                Some(m) => *m,
+                None => motions.collider(co2, scene.bodies)?,
+            };
+            match c.kind {
+                PairKind::Solid => {
+                    solid.push(ShapeMotion {
+                        shape: co2.shape(),
+                        motion: motion2,
+                    });
+                    handles.push(c.handle);
+                }
+                PairKind::Sensor => sensors.push(SensorPair {
+                    collider1: h1,
+                    collider2: c.handle,
+                    motion1,
+                    motion2,
+                }),
+            }
+        }
+        report.pairs += ws.candidates.len();
+        if solid.is_empty() {
+            continue;
+        }
+        let moving = ShapeMotion {
+            shape: co1.shape(),
+            motion: motion1,
+        };
+        if let Some((toi, j)) = earliest(&moving, &solid, opts, report)? {
+            if best.is_none_or(|b| toi.fraction < b.toi.fraction) {
+                best = Some(BodyHit {
+                    toi,
+                    collider1: h1,
+                    collider2: handles[j],
+                });
+            }
+        }
+    }
+    Ok(best)
+}
