@@ -7,7 +7,9 @@
 //!   guards and by the generic contact counter: otherwise the oracle could
 //!   never fail and would prove nothing;
 //! - every backend is clean on the control scene with slow bodies: otherwise
-//!   the oracle reports false alarms.
+//!   the oracle reports false alarms;
+//! - `affine` has zero tunnelling events, missed contacts and deep ends on
+//!   every scene, and no count above `rapier`'s.
 //!
 //! Run: `cargo test --release --test scenes -- --nocapture` to see the table.
 
@@ -29,8 +31,7 @@ fn the_oracle_sees_tunnelling_without_ccd_and_nothing_on_slow_scenes() {
             };
             match run_scene(&scene, backend, &options) {
                 Ok(report) => reports.push((scene, report)),
-                // The affine backend is not wired in yet.
-                Err(e) => println!("{} / {backend}: {e}", scene.name),
+                Err(e) => failures.push(format!("{} / {backend}: {e}", scene.name)),
             }
         }
     }
@@ -80,19 +81,42 @@ fn the_oracle_sees_tunnelling_without_ccd_and_nothing_on_slow_scenes() {
         }
     }
 
-    // ---------------------------------------------------------------------
-    // AFFINE ASSERTIONS GO HERE, once `make_stepper(Backend::Affine, ..)`
-    // returns a stepper:
-    //   - for every scene, the affine report has zero tunnelling events,
-    //     zero missed contacts and zero deep ends;
-    //   - for every scene, each affine count ≤ the rapier count.
-    // Until then, check that the affine backend is reported unavailable
-    // rather than silently skipped for another reason.
-    // ---------------------------------------------------------------------
-    let affine_ran = reports.iter().any(|(_, r)| r.backend == Backend::Affine);
-    assert!(
-        !affine_ran,
-        "the affine backend runs now: add its assertions above"
+    // The affine stage: clean on every scene, and never worse than rapier.
+    let mut affine_runs = 0;
+    for (scene, r) in reports.iter().filter(|(_, r)| r.backend == Backend::Affine) {
+        affine_runs += 1;
+        if !r.is_clean() {
+            failures.push(format!(
+                "{} / affine: {} tunnelling, {} missed, {} deep: expected all zero",
+                r.scene, r.tunnelling, r.missed_contacts, r.deep_ends
+            ));
+        }
+        let rapier = reports
+            .iter()
+            .find(|(s, q)| s.name == scene.name && q.backend == Backend::Rapier)
+            .map(|(_, q)| q);
+        if let Some(q) = rapier {
+            let worse = r.tunnelling > q.tunnelling
+                || r.missed_contacts > q.missed_contacts
+                || r.deep_ends > q.deep_ends;
+            if worse {
+                failures.push(format!(
+                    "{}: affine ({}, {}, {}) is worse than rapier ({}, {}, {})",
+                    r.scene,
+                    r.tunnelling,
+                    r.missed_contacts,
+                    r.deep_ends,
+                    q.tunnelling,
+                    q.missed_contacts,
+                    q.deep_ends
+                ));
+            }
+        }
+    }
+    assert_eq!(
+        affine_runs,
+        scenes::all().len(),
+        "the affine backend must run on every scene"
     );
 
     assert!(

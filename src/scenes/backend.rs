@@ -5,8 +5,8 @@
 //!   CCD velocities), whatever the bodies' `ccd_enabled` flag says.
 //! - `rapier`: rapier's defaults (`max_ccd_substeps = 1`, the post-solve
 //!   clamp) honouring the scenes' `ccd_enabled` bodies.
-//! - `affine`: this crate's stage, `affine_ccd::rapier::AffineCcd`. Not
-//!   built yet: [`make_stepper`] answers `None` for it.
+//! - `affine`: this crate's stage, [`crate::rapier::AffineCcd`], installed
+//!   into the world (its dispatcher in, rapier's CCD off).
 
 use rapier3d::prelude::PhysicsWorld;
 use std::fmt;
@@ -63,8 +63,8 @@ impl FromStr for Backend {
 /// Settings handed to a backend when it is made.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct BackendConfig {
-    /// Target separation for the affine backend (metres); `None` for its
-    /// default. Ignored by `off` and `rapier`.
+    /// Accuracy of the affine backend as a fraction of the step; `None` for
+    /// its default. Ignored by `off` and `rapier`.
     pub epsilon: Option<f64>,
 }
 
@@ -115,15 +115,40 @@ impl Stepper for Rapier {
     }
 }
 
-/// The one place a backend becomes a stepper. `None`: not available (yet).
+/// This crate's CCD stage, timed by its own report.
+struct Affine {
+    ccd: crate::rapier::AffineCcd,
+    ccd_time: Duration,
+}
+
+impl Stepper for Affine {
+    fn install(&mut self, world: &mut PhysicsWorld) {
+        self.ccd.install(world);
+    }
+
+    fn step(&mut self, world: &mut PhysicsWorld) {
+        self.ccd_time += self.ccd.step(world).elapsed;
+    }
+
+    fn ccd_time(&self) -> Option<Duration> {
+        Some(self.ccd_time)
+    }
+}
+
+/// The one place a backend becomes a stepper. `None`: not available.
 pub fn make_stepper(backend: Backend, config: &BackendConfig) -> Option<Box<dyn Stepper>> {
-    let _ = config.epsilon; // Only the affine backend will read it.
     match backend {
         Backend::Off => Some(Box::new(Off)),
         Backend::Rapier => Some(Box::new(Rapier)),
-        // AFFINE WIRE-IN: wrap `affine_ccd::rapier::AffineCcd::default()`
-        // (epsilon from `config`) in a `Stepper` whose `install` calls
-        // `ccd.install(world)` and whose `step` calls `ccd.step(world)`.
-        Backend::Affine => None,
+        Backend::Affine => {
+            let mut ccd = crate::rapier::AffineCcd::default();
+            if let Some(epsilon) = config.epsilon {
+                ccd.config_mut().epsilon = epsilon;
+            }
+            Some(Box::new(Affine {
+                ccd,
+                ccd_time: Duration::ZERO,
+            }))
+        }
     }
 }
