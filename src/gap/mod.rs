@@ -13,6 +13,7 @@
 //! | ball–ball | squared centre distance | `ball_ball.rs` |
 
 mod ball_ball;
+pub(crate) mod primitives;
 
 pub(crate) use ball_ball::BallBall;
 

@@ -35,6 +35,8 @@ use crate::solve::{GapSet, RootStatus, SolveOptions, SolveOutcome, SolveStats, S
 use nalgebra::{Point3, Vector3};
 use rapier3d::parry::shape::Shape;
 
+pub use crate::gap::primitives::{PrimitiveToi, edge_edge_toi, vertex_face_toi};
+
 /// How a query searches.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct QueryOptions {
@@ -65,7 +67,7 @@ impl Default for QueryOptions {
 }
 
 impl QueryOptions {
-    fn solve_options(&self) -> Result<SolveOptions, CcdError> {
+    pub(crate) fn solve_options(&self) -> Result<SolveOptions, CcdError> {
         check_finite("skin", self.skin)?;
         if self.skin < 0.0 {
             return Err(CcdError::BadParameter {
