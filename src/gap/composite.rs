@@ -82,9 +82,8 @@ impl Bounds {
 
     /// True when the box holds no point (or is not finite).
     pub fn is_empty(&self) -> bool {
-        (0..3).any(|i| {
-            !(self.lo[i] <= self.hi[i]) || !self.lo[i].is_finite() || !self.hi[i].is_finite()
-        })
+        (0..3)
+            .any(|i| !self.lo[i].is_finite() || !self.hi[i].is_finite() || self.lo[i] > self.hi[i])
     }
 
     /// The box grown by [`GROWTH`] of its largest coordinate.
