@@ -327,6 +327,26 @@ impl Motion {
         Ok(motion)
     }
 
+    /// The motion of a frame fixed to this one at `local` (the second
+    /// frame's pose in this frame's coordinates, metres), e.g. a compound
+    /// shape's part: it turns about the same centre at the same rate, so
+    /// `with_local_frame(local).pose_at(τ) = pose_at(τ) · local` (up to the
+    /// rounding of composing the start pose once, in `f64`).
+    ///
+    /// Gap functions that need the part's pose *enclosed* compose
+    /// [`Trajectory::pose`] of this frame with `local` in enclosure
+    /// arithmetic instead, so that no rounding escapes.
+    pub fn with_local_frame(&self, local: &Isometry3<f64>) -> Motion {
+        let mut motion = *self;
+        motion.arm = self.arm + self.start_rotation * local.translation.vector;
+        motion.start_rotation =
+            UnitQuaternion::new_normalize((self.start_rotation * local.rotation).into_inner());
+        motion.start_matrix = *motion.start_rotation.to_rotation_matrix().matrix();
+        // The prepared rotation products depend on the start and the arm.
+        motion.spin = Spin::new(&motion.rotation, &motion.start_matrix, &motion.arm);
+        motion
+    }
+
     /// The step length in seconds (0 for a fixed frame).
     pub fn dt(&self) -> f64 {
         self.dt

@@ -177,3 +177,40 @@ fn bad_motion_input_is_a_typed_error() {
         let _ = pose.translation.x.range();
     }
 }
+
+#[test]
+fn a_local_frame_follows_its_parent() {
+    let start = Isometry3::new(Vector3::new(1.0, -2.0, 0.5), Vector3::new(0.3, 0.2, -0.1));
+    let parent = Motion::from_velocities(
+        start,
+        Point3::new(1.2, -1.8, 0.4),
+        Vector3::new(20.0, -5.0, 3.0),
+        Vector3::new(40.0, 10.0, -25.0),
+        DT,
+    )
+    .unwrap()
+    .with_acceleration(Vector3::new(0.0, -9.81, 0.0))
+    .unwrap();
+    let local = Isometry3::new(Vector3::new(0.4, 0.0, -0.7), Vector3::new(0.0, 1.1, 0.2));
+    let child = parent.with_local_frame(&local);
+    for i in 0..=16 {
+        let tau = f64::from(i) / 16.0;
+        let expected = parent.pose_at(tau) * local;
+        let got = child.pose_at(tau);
+        let dp = (expected.translation.vector - got.translation.vector).norm();
+        let dr = expected.rotation.angle_to(&got.rotation);
+        assert!(
+            dp < 1e-12 && dr < 1e-12,
+            "τ = {tau}: {dp} m, {dr} rad apart"
+        );
+        // The child's enclosed pose holds its exact pose.
+        let pose: Pose<Affine> = child.pose(TimeSpan::new(tau, tau));
+        for k in 0..3 {
+            let x = pose.translation[k].range();
+            assert!(
+                x.lo - 1e-12 <= got.translation.vector[k]
+                    && got.translation.vector[k] <= x.hi + 1e-12
+            );
+        }
+    }
+}

@@ -11,15 +11,31 @@
 //! | pair | family | file |
 //! |---|---|---|
 //! | ball–ball | squared centre distance | `ball_ball.rs` |
+//! | ball–triangle | vertex–face axes, radius as skin | `ball_triangle.rs` |
+//! | ball–segment | end planes + adaptive direction | `ball_segment.rs` |
+//! | triangle–triangle | face normals, edge crosses, adaptive | `triangle_triangle.rs` |
+//! | vertex–face, edge–edge (linear vertices) | primitive axes | `primitives.rs` |
+//! | shape/mesh–composite | bounding gap, expanded through the BVH | `composite.rs` |
 
 mod ball_ball;
+mod ball_segment;
+mod ball_triangle;
+pub(crate) mod composite;
+pub(crate) mod primitives;
+mod triangle_triangle;
 
 pub(crate) use ball_ball::BallBall;
+pub(crate) use ball_segment::BallSegment;
+pub(crate) use ball_triangle::BallTriangle;
+pub(crate) use triangle_triangle::TriangleTriangle;
 
+use crate::convert::vec_from_glam;
 use crate::enclosure::{Enclosure, TimeSpan};
 use crate::error::{CcdError, check_finite};
 use crate::motion::{Motion, Pose};
-use rapier3d::parry::shape::{Shape, TypedShape};
+use nalgebra::Vector3;
+use rapier3d::parry::math::Vector;
+use rapier3d::parry::shape::{Ball, Segment, Shape, Triangle, TypedShape};
 
 /// One shape of a pair as an axis function sees it on a node.
 pub(crate) struct Side<'p, E: Enclosure> {
@@ -37,6 +53,9 @@ pub(crate) struct Side<'p, E: Enclosure> {
 #[derive(Clone, Debug)]
 pub(crate) enum PairGap {
     BallBall(BallBall),
+    BallTriangle(BallTriangle),
+    BallSegment(BallSegment),
+    TriangleTriangle(TriangleTriangle),
 }
 
 impl PairGap {
@@ -44,6 +63,9 @@ impl PairGap {
     pub fn axis_count(&self) -> usize {
         match self {
             PairGap::BallBall(_) => BallBall::AXES,
+            PairGap::BallTriangle(_) => BallTriangle::AXES,
+            PairGap::BallSegment(_) => BallSegment::AXES,
+            PairGap::TriangleTriangle(_) => TriangleTriangle::AXES,
         }
     }
 
@@ -67,6 +89,9 @@ impl PairGap {
     ) {
         match self {
             PairGap::BallBall(g) => g.eval(span, a, b, axes, out),
+            PairGap::BallTriangle(g) => g.eval(span, a, b, axes, out),
+            PairGap::BallSegment(g) => g.eval(span, a, b, axes, out),
+            PairGap::TriangleTriangle(g) => g.eval(span, a, b, axes, out),
         }
     }
 }
@@ -88,12 +113,20 @@ pub(crate) fn build(shape1: &dyn Shape, shape2: &dyn Shape, skin: f64) -> Result
             swapped: false,
         })
     };
+    let swapped = |gap| Ok(Built { gap, swapped: true });
     match (shape1.as_typed_shape(), shape2.as_typed_shape()) {
         (T::Ball(b1), T::Ball(b2)) => straight(PairGap::BallBall(BallBall::new(
             radius(b1.radius)?,
             radius(b2.radius)?,
             skin,
         ))),
+        (T::Ball(b), T::Triangle(t)) => straight(ball_triangle(b, t, skin)?),
+        (T::Triangle(t), T::Ball(b)) => swapped(ball_triangle(b, t, skin)?),
+        (T::Ball(b), T::Segment(s)) => straight(ball_segment(b, s, skin)?),
+        (T::Segment(s), T::Ball(b)) => swapped(ball_segment(b, s, skin)?),
+        (T::Triangle(t1), T::Triangle(t2)) => straight(PairGap::TriangleTriangle(
+            TriangleTriangle::new(corners(t1)?, corners(t2)?, skin),
+        )),
         _ => Err(CcdError::Unsupported {
             what: format!(
                 "{:?} against {:?}",
@@ -115,6 +148,41 @@ pub(crate) fn length(what: &'static str, x: f32) -> Result<f64, CcdError> {
         });
     }
     Ok(x)
+}
+
+fn ball_triangle(b: &Ball, t: &Triangle, skin: f64) -> Result<PairGap, CcdError> {
+    Ok(PairGap::BallTriangle(BallTriangle::new(
+        radius(b.radius)?,
+        corners(t)?,
+        skin,
+    )))
+}
+
+fn ball_segment(b: &Ball, s: &Segment, skin: f64) -> Result<PairGap, CcdError> {
+    let ends = [point("segment end", s.a)?, point("segment end", s.b)?];
+    Ok(PairGap::BallSegment(BallSegment::new(
+        radius(b.radius)?,
+        ends,
+        skin,
+    )))
+}
+
+/// A triangle's corners as `f64` vectors, checked finite.
+fn corners(t: &Triangle) -> Result<[Vector3<f64>; 3], CcdError> {
+    Ok([
+        point("triangle corner", t.a)?,
+        point("triangle corner", t.b)?,
+        point("triangle corner", t.c)?,
+    ])
+}
+
+/// A shape's point as an `f64` vector (exact), checked finite.
+pub(crate) fn point(what: &'static str, v: Vector) -> Result<Vector3<f64>, CcdError> {
+    let p = vec_from_glam(v);
+    for x in p.iter() {
+        check_finite(what, *x)?;
+    }
+    Ok(p)
 }
 
 fn radius(r: f32) -> Result<f64, CcdError> {

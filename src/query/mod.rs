@@ -29,13 +29,17 @@
 use crate::convert::{pose_from_iso, vec_from_glam};
 use crate::enclosure::{Affine, Arithmetic, Enclosure, Interval, Taylor2, Taylor3, TimeSpan};
 use crate::error::{CcdError, check_finite};
+use crate::gap::composite::{self, Child, Item, Part};
 use crate::gap::{self, PairGap, Side};
 use crate::motion::{Motion, Pose, Trajectory};
 use crate::solve::{
     GapSet, InitialContact, RootStatus, SolveOptions, SolveOutcome, SolveStats, Solver,
 };
-use nalgebra::{Point3, Vector3};
+use nalgebra::{Isometry3, Matrix3, Point3, Vector3};
 use rapier3d::parry::shape::Shape;
+use std::collections::HashMap;
+
+pub use crate::gap::primitives::{PrimitiveToi, edge_edge_toi, vertex_face_toi};
 
 /// How a query searches.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -71,7 +75,7 @@ impl Default for QueryOptions {
 }
 
 impl QueryOptions {
-    fn solve_options(&self) -> Result<SolveOptions, CcdError> {
+    pub(crate) fn solve_options(&self) -> Result<SolveOptions, CcdError> {
         check_finite("skin", self.skin)?;
         if self.skin < 0.0 {
             return Err(CcdError::BadParameter {
@@ -161,10 +165,12 @@ pub fn time_of_impact_many(
 
 /// `true` when the crate has a distance function for this pair of shapes.
 pub fn is_supported(shape1: &dyn Shape, shape2: &dyn Shape) -> bool {
-    !matches!(
-        gap::build(shape1, shape2, 0.0),
-        Err(CcdError::Unsupported { .. })
-    )
+    let checked = if composite::is_composite(shape1) || composite::is_composite(shape2) {
+        composite::check_leaves(shape1, shape2, 0.0)
+    } else {
+        gap::build(shape1, shape2, 0.0).map(|_| ())
+    };
+    !matches!(checked, Err(CcdError::Unsupported { .. }))
 }
 
 /// A reusable query context: keeps the solver's buffers between queries
@@ -187,17 +193,23 @@ impl Query {
         options: &QueryOptions,
     ) -> Result<Option<ManyToi>, CcdError> {
         let solve_options = options.solve_options()?;
-        let mut motions: Vec<Motion> = Vec::with_capacity(moving.len() + targets.len());
-        motions.extend(moving.iter().map(|m| m.motion));
-        motions.extend(targets.iter().map(|t| t.motion));
+        let mut frames: Vec<FrameDef> = Vec::with_capacity(moving.len() + targets.len());
+        frames.extend(moving.iter().map(|m| FrameDef::root(m.motion)));
+        frames.extend(targets.iter().map(|t| FrameDef::root(t.motion)));
         let mut pairs = Vec::with_capacity(moving.len() * targets.len());
         for (i, m) in moving.iter().enumerate() {
             for (j, t) in targets.iter().enumerate() {
-                let built = gap::build(m.shape, t.shape, options.skin)?;
-                let (a, b) = (i, moving.len() + j);
-                let (a, b) = if built.swapped { (b, a) } else { (a, b) };
+                let (a, b) = (i as u32, (moving.len() + j) as u32);
+                let kind = if composite::is_composite(m.shape) || composite::is_composite(t.shape) {
+                    composite::check_leaves(m.shape, t.shape, options.skin)?;
+                    let (ia, ib) = (Item::whole(m.shape, a), Item::whole(t.shape, b));
+                    PairKind::Composite(CompositePair::new(ia, ib))
+                } else {
+                    let built = gap::build(m.shape, t.shape, options.skin)?;
+                    PairKind::Leaf(built.gap, built.swapped)
+                };
                 pairs.push(PairEntry {
-                    gap: built.gap,
+                    kind,
                     a,
                     b,
                     moving: i,
@@ -205,17 +217,39 @@ impl Query {
                 });
             }
         }
-        let outcome = match options.arithmetic {
-            Arithmetic::Interval => self.run::<Interval>(&motions, &pairs, &solve_options),
-            Arithmetic::Affine => self.run::<Affine>(&motions, &pairs, &solve_options),
-            Arithmetic::Taylor2 => self.run::<Taylor2>(&motions, &pairs, &solve_options),
-            Arithmetic::Taylor3 => self.run::<Taylor3>(&motions, &pairs, &solve_options),
+        let (outcome, hit) = match options.arithmetic {
+            Arithmetic::Interval => run::<Interval>(
+                &mut self.solver,
+                frames,
+                pairs,
+                options.skin,
+                &solve_options,
+            ),
+            Arithmetic::Affine => run::<Affine>(
+                &mut self.solver,
+                frames,
+                pairs,
+                options.skin,
+                &solve_options,
+            ),
+            Arithmetic::Taylor2 => run::<Taylor2>(
+                &mut self.solver,
+                frames,
+                pairs,
+                options.skin,
+                &solve_options,
+            ),
+            Arithmetic::Taylor3 => run::<Taylor3>(
+                &mut self.solver,
+                frames,
+                pairs,
+                options.skin,
+                &solve_options,
+            ),
         }?;
-        let Some(pair) = outcome.pair else {
+        let Some((i, j)) = hit else {
             return Ok(None);
         };
-        let entry = &pairs[pair];
-        let (i, j) = (entry.moving, entry.target);
         let toi = describe(
             &outcome,
             moving[i].shape,
@@ -229,98 +263,335 @@ impl Query {
             target: j,
         }))
     }
+}
 
-    fn run<E: Enclosure>(
-        &mut self,
-        motions: &[Motion],
-        pairs: &[PairEntry],
-        options: &SolveOptions,
-    ) -> Result<SolveOutcome, CcdError> {
-        // A motion's rotation is enclosed only if some pair reads it.
-        let mut rotation_read = vec![false; motions.len()];
-        for pair in pairs {
-            let [a, b] = pair.gap.reads_rotation();
-            rotation_read[pair.a] |= a;
-            rotation_read[pair.b] |= b;
-        }
-        let mut set = PairSet::<E> {
-            motions,
-            pairs,
-            poses: vec![None; motions.len()],
-            rotation_read,
+/// One search in the arithmetic `E`: the outcome and the caller's
+/// (moving, target) indices of the pair that may touch. A gap that could
+/// not be built mid-search (a piece with bad parameters) is reported as
+/// its error after the search.
+fn run<E: Enclosure>(
+    solver: &mut Solver,
+    frames: Vec<FrameDef>,
+    pairs: Vec<PairEntry<'_>>,
+    skin: f64,
+    options: &SolveOptions,
+) -> Result<(SolveOutcome, Option<(usize, usize)>), CcdError> {
+    // A frame's rotation is enclosed only if some pair reads it (pairs
+    // that composites create later only involve frames of composite
+    // pairs, which read it).
+    let mut rotation_read = vec![false; frames.len()];
+    for pair in &pairs {
+        let [a, b] = match &pair.kind {
+            PairKind::Leaf(gap, false) => gap.reads_rotation(),
+            PairKind::Leaf(gap, true) => {
+                let [a, b] = gap.reads_rotation();
+                [b, a]
+            }
+            _ => [true, true],
         };
-        self.solver.solve(&mut set, options)
+        rotation_read[pair.a as usize] |= a;
+        rotation_read[pair.b as usize] |= b;
+    }
+    let mut set = PairSet::<E> {
+        poses: vec![None; frames.len()],
+        rotation_read,
+        frames,
+        initial: pairs.len(),
+        pairs,
+        skin,
+        child_frames: HashMap::new(),
+        relative: Vec::new(),
+        scratch: Vec::new(),
+        error: None,
+    };
+    let outcome = solver.solve(&mut set, options)?;
+    if let Some(error) = set.error {
+        return Err(error);
+    }
+    let hit = outcome
+        .pair
+        .map(|p| (set.pairs[p].moving, set.pairs[p].target));
+    Ok((outcome, hit))
+}
+
+/// A frame of the search: a body's motion, or a frame fixed to another at
+/// a local pose (a compound's part).
+struct FrameDef {
+    motion: Motion,
+    /// The parent frame and this frame's rotation and origin in it.
+    parent: Option<(u32, Matrix3<f64>, Vector3<f64>)>,
+}
+
+impl FrameDef {
+    fn root(motion: Motion) -> FrameDef {
+        FrameDef {
+            motion,
+            parent: None,
+        }
     }
 }
 
-/// One pair of the search: its gap, the motions of its two sides, and the
-/// caller's indices.
-struct PairEntry {
-    gap: PairGap,
-    a: usize,
-    b: usize,
+/// What a pair is.
+enum PairKind<'s> {
+    /// A gap family; `true` when its `a` side is the entry's `b` frame.
+    Leaf(PairGap, bool),
+    /// A bounding gap over two parts, one of which splits.
+    Composite(CompositePair<'s>),
+    /// A piece whose gap could not be built: never apart (the error is
+    /// reported after the search).
+    Broken,
+}
+
+/// A composite pair and, once split, its children with their pair ids
+/// (made on first need and kept: repeated splits on later nodes reuse them).
+struct CompositePair<'s> {
+    a: Item<'s>,
+    b: Item<'s>,
+    split_b: bool,
+    kids: Option<Vec<(Child<'s>, Option<u32>)>>,
+}
+
+impl<'s> CompositePair<'s> {
+    fn new(a: Item<'s>, b: Item<'s>) -> CompositePair<'s> {
+        CompositePair {
+            split_b: composite::split_b(&a, &b),
+            a,
+            b,
+            kids: None,
+        }
+    }
+}
+
+/// One pair of the search: what it is, the frames of its two sides, and
+/// the caller's indices of the shapes it came from.
+struct PairEntry<'s> {
+    kind: PairKind<'s>,
+    a: u32,
+    b: u32,
     moving: usize,
     target: usize,
 }
 
-/// The pairs of a query as the solver sees them. Each motion's pose is
-/// enclosed once per node, on first use, for all the pairs that share it.
-struct PairSet<'q, E: Enclosure> {
-    motions: &'q [Motion],
-    pairs: &'q [PairEntry],
+/// The pairs of a query as the solver sees them: the caller's pairs first,
+/// then the pairs that splitting composites creates during the search (an
+/// arena that only grows within a query; each child pair is made once per
+/// parent and child). Each frame's pose is enclosed once per node, on first
+/// use, for all the pairs that share it; so are the relative poses that
+/// composite pairs use.
+struct PairSet<'s, E: Enclosure> {
+    frames: Vec<FrameDef>,
     poses: Vec<Option<Pose<E>>>,
-    /// Per motion: does any pair read its rotation?
+    /// Per frame: does any pair read its rotation? (Balls read only their
+    /// origin, which saves enclosing a rotating matrix per node.)
     rotation_read: Vec<bool>,
+    pairs: Vec<PairEntry<'s>>,
+    initial: usize,
+    skin: f64,
+    /// (parent frame, part index) → the part's frame.
+    child_frames: HashMap<(u32, u32), u32>,
+    /// `(to, from, pose of from in to)` for this node.
+    relative: Vec<(u32, u32, Pose<E>)>,
+    scratch: Vec<Child<'s>>,
+    error: Option<CcdError>,
 }
 
-impl<E: Enclosure> PairSet<'_, E> {
-    fn pose(&mut self, index: usize, span: TimeSpan) -> Pose<E> {
-        let motion = &self.motions[index];
-        let with_rotation = self.rotation_read[index];
-        *self.poses[index].get_or_insert_with(|| {
-            if with_rotation {
-                motion.pose(span)
-            } else {
+impl<'s, E: Enclosure> PairSet<'s, E> {
+    fn pose(&mut self, index: u32, span: TimeSpan) -> Pose<E> {
+        let i = index as usize;
+        if let Some(p) = self.poses[i] {
+            return p;
+        }
+        let pose = match self.frames[i].parent {
+            None if !self.rotation_read[i] => {
                 // Only the origin is read: the rotation stays at its start.
+                let motion = &self.frames[i].motion;
                 let mut pose = Pose::constant(&motion.start_rotation_matrix(), &Vector3::zeros());
                 pose.translation = motion.origin(span);
                 pose
             }
-        })
+            None => self.frames[i].motion.pose(span),
+            Some((parent, rotation, origin)) => {
+                let p = self.pose(parent, span);
+                Pose {
+                    rotation: Matrix3::from_fn(|r, c| {
+                        p.rotation[(r, 0)] * rotation[(0, c)]
+                            + p.rotation[(r, 1)] * rotation[(1, c)]
+                            + p.rotation[(r, 2)] * rotation[(2, c)]
+                    }),
+                    translation: p.transform_point(&origin),
+                }
+            }
+        };
+        self.poses[i] = Some(pose);
+        pose
+    }
+
+    /// The pose of frame `from` in frame `to`'s coordinates over the node.
+    fn relative(&mut self, to: u32, from: u32, span: TimeSpan) -> Pose<E> {
+        if let Some((_, _, p)) = self.relative.iter().find(|r| r.0 == to && r.1 == from) {
+            return *p;
+        }
+        let (pt, pf) = (self.pose(to, span), self.pose(from, span));
+        let rel = pt.relative(&pf);
+        self.relative.push((to, from, rel));
+        rel
+    }
+
+    /// The frame of part `index` of a compound in frame `parent`.
+    fn child_frame(&mut self, parent: u32, index: u32, local: &Isometry3<f64>) -> u32 {
+        if let Some(&f) = self.child_frames.get(&(parent, index)) {
+            return f;
+        }
+        let motion = self.frames[parent as usize].motion.with_local_frame(local);
+        let rotation = *local.rotation.to_rotation_matrix().matrix();
+        let id = self.frames.len() as u32;
+        self.frames.push(FrameDef {
+            motion,
+            parent: Some((parent, rotation, local.translation.vector)),
+        });
+        self.poses.push(None);
+        self.rotation_read.push(true);
+        self.child_frames.insert((parent, index), id);
+        id
+    }
+
+    /// A new pair between two items, in this order; returns its id.
+    fn make_pair(&mut self, a: Item<'s>, b: Item<'s>, moving: usize, target: usize) -> u32 {
+        let kind = match (a.part.shape(), b.part.shape()) {
+            (Some(sa), Some(sb)) => match gap::build(sa, sb, self.skin) {
+                Ok(built) => PairKind::Leaf(built.gap, built.swapped),
+                Err(e) => {
+                    self.error.get_or_insert(e);
+                    PairKind::Broken
+                }
+            },
+            _ => PairKind::Composite(CompositePair::new(a, b)),
+        };
+        self.pairs.push(PairEntry {
+            kind,
+            a: a.frame,
+            b: b.frame,
+            moving,
+            target,
+        });
+        (self.pairs.len() - 1) as u32
     }
 }
 
 impl<E: Enclosure> GapSet<E> for PairSet<'_, E> {
     fn pair_count(&self) -> usize {
-        self.pairs.len()
+        self.initial
     }
 
     fn axis_count(&self, pair: usize) -> usize {
-        self.pairs[pair].gap.axis_count()
+        match &self.pairs[pair].kind {
+            PairKind::Leaf(gap, _) => gap.axis_count(),
+            PairKind::Composite(_) => composite::AXES,
+            PairKind::Broken => 1,
+        }
     }
 
     fn begin_node(&mut self, _span: TimeSpan) {
         // A fixed frame's pose is the same on every node: keep it.
-        for (pose, motion) in self.poses.iter_mut().zip(self.motions) {
-            if !motion.is_fixed() {
+        for (pose, frame) in self.poses.iter_mut().zip(&self.frames) {
+            if !frame.motion.is_fixed() {
                 *pose = None;
             }
         }
+        self.relative.clear();
     }
 
     fn eval(&mut self, pair: usize, span: TimeSpan, axes: u64, out: &mut [E]) {
         let entry = &self.pairs[pair];
-        let (ia, ib) = (entry.a, entry.b);
-        let (pa, pb) = (self.pose(ia, span), self.pose(ib, span));
-        let a = Side {
-            pose: &pa,
-            motion: &self.motions[ia],
+        let (fa, fb) = (entry.a, entry.b);
+        match &entry.kind {
+            PairKind::Leaf(_, swapped) => {
+                let (fa, fb) = if *swapped { (fb, fa) } else { (fa, fb) };
+                let (pa, pb) = (self.pose(fa, span), self.pose(fb, span));
+                let a = Side {
+                    pose: &pa,
+                    motion: &self.frames[fa as usize].motion,
+                };
+                let b = Side {
+                    pose: &pb,
+                    motion: &self.frames[fb as usize].motion,
+                };
+                if let PairKind::Leaf(gap, _) = &self.pairs[pair].kind {
+                    gap.eval(span, &a, &b, axes, out);
+                }
+            }
+            PairKind::Composite(c) => {
+                let (small, big) = if c.split_b { (c.a, c.b) } else { (c.b, c.a) };
+                let rel = self.relative(big.frame, small.frame, span);
+                composite::bounding_axes(&rel, &small.bounds, &big.bounds, self.skin, out);
+            }
+            PairKind::Broken => out[0] = E::zero(),
+        }
+    }
+
+    fn expand(&mut self, pair: usize, span: TimeSpan, out: &mut Vec<u32>) -> bool {
+        let PairKind::Composite(c) = &mut self.pairs[pair].kind else {
+            return false;
         };
-        let b = Side {
-            pose: &pb,
-            motion: &self.motions[ib],
+        let (split, other) = if c.split_b { (c.b, c.a) } else { (c.a, c.b) };
+        let split_b = c.split_b;
+        if c.kids.is_none() {
+            self.scratch.clear();
+            composite::children(&split.part, &mut self.scratch);
+            c.kids = Some(self.scratch.iter().map(|k| (*k, None)).collect());
+        }
+        let (moving, target) = (self.pairs[pair].moving, self.pairs[pair].target);
+        let rel = self.relative(split.frame, other.frame, span);
+        let sweep = composite::swept(&rel, &other.bounds);
+        let count = match &self.pairs[pair].kind {
+            PairKind::Composite(c) => c.kids.as_ref().map_or(0, Vec::len),
+            _ => 0,
         };
-        self.pairs[pair].gap.eval(span, &a, &b, axes, out);
+        for k in 0..count {
+            let (child, id) = match &self.pairs[pair].kind {
+                PairKind::Composite(c) => c.kids.as_ref().expect("split above")[k],
+                _ => unreachable!("a composite pair stays one"),
+            };
+            if !composite::child_meets(&child, &sweep, self.skin) {
+                continue;
+            }
+            let id = match id {
+                Some(id) => id,
+                None => {
+                    let item = match child.local {
+                        None => Item {
+                            part: child.part,
+                            frame: split.frame,
+                            bounds: child.bounds,
+                        },
+                        Some((index, local)) => {
+                            let frame = self.child_frame(split.frame, index, &local);
+                            match child.part {
+                                Part::Shape(s) => Item::whole(s, frame),
+                                part => Item {
+                                    part,
+                                    frame,
+                                    bounds: child.bounds,
+                                },
+                            }
+                        }
+                    };
+                    let id = if split_b {
+                        self.make_pair(other, item, moving, target)
+                    } else {
+                        self.make_pair(item, other, moving, target)
+                    };
+                    if let PairKind::Composite(c) = &mut self.pairs[pair].kind {
+                        if let Some(kids) = c.kids.as_mut() {
+                            kids[k].1 = Some(id);
+                        }
+                    }
+                    id
+                }
+            };
+            out.push(id);
+        }
+        true
     }
 }
 

@@ -1,0 +1,505 @@
+//! Composite shapes: TriMesh, HeightField, Polyline and Compound, on either
+//! side of a pair (a shape against a mesh, a moving mesh against anything).
+//!
+//! A composite pair stands for every pair of their pieces. Its one gap is a
+//! *bounding* gap: the box of one side, carried into the other side's frame
+//! by the enclosed relative pose (so it sweeps with the node), against the
+//! other side's box; six axes, `lo_i − hi'_i − skin` and `lo'_i − hi_i −
+//! skin` per coordinate `i`, any of which `> 0` proves the pieces apart.
+//! When the pair survives a node, [`crate::solve::GapSet::expand`] splits
+//! one side (the larger that can be split) into its children:
+//! - TriMesh, Polyline, Compound: the two children of a node of parry's BVH
+//!   ([`Bvh::traverse_indexed`] gives them lazily); a leaf is a triangle, a
+//!   segment, or a compound's part in its own frame;
+//! - HeightField (which has no BVH): an implicit binary tree over its grid
+//!   of cells, each node's box from the heights it covers, computed in
+//!   `f32` exactly as parry builds the triangles; a single cell splits into
+//!   its two triangles.
+//!
+//! Only children whose box meets the swept box of the other side on the
+//! node join. Pieces that cannot be split meet through [`super::build`],
+//! the same families as whole shapes (ball–triangle, triangle–triangle, …).
+//!
+//! ## Boxes and rounding
+//!
+//! parry's boxes are `f32` and, for compound parts, computed with `f32`
+//! rotations. Every box is therefore grown by [`GROWTH`] of its largest
+//! coordinate before use, far more than the few `f32` ulps parry's
+//! rounding can take; a box that is too large costs only tightness.
+
+use super::CcdError;
+use crate::convert::iso_from_pose;
+use crate::enclosure::rounding::{down, up};
+use crate::enclosure::{Enclosure, Interval};
+use crate::motion::Pose;
+use nalgebra::{Isometry3, UnitQuaternion, Vector3};
+use rapier3d::parry::bounding_volume::Aabb;
+use rapier3d::parry::partitioning::{Bvh, BvhNode, BvhNodeIndex, TraversalAction};
+use rapier3d::parry::shape::{
+    Compound, HeightField, Polyline, Segment, Shape, ShapeType, TriMesh, Triangle, TypedShape,
+};
+
+/// Boxes from parry are grown by this share of their largest coordinate
+/// (2⁻¹⁸ ≈ 32 ulps of `f32`).
+pub(crate) const GROWTH: f64 = 1.0 / 262_144.0;
+
+/// The number of axes of a composite pair.
+pub(crate) const AXES: usize = 6;
+
+/// An axis-aligned box in one frame, metres.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Bounds {
+    pub lo: Vector3<f64>,
+    pub hi: Vector3<f64>,
+}
+
+impl Bounds {
+    /// Nothing: a box every test finds apart.
+    fn empty() -> Bounds {
+        Bounds {
+            lo: Vector3::repeat(f64::INFINITY),
+            hi: Vector3::repeat(f64::NEG_INFINITY),
+        }
+    }
+
+    /// The box of some `f32` points, grown.
+    fn of_points(points: &[Vector3<f64>]) -> Bounds {
+        let mut b = Bounds::empty();
+        for p in points {
+            b.lo = b.lo.inf(p);
+            b.hi = b.hi.sup(p);
+        }
+        b.grown()
+    }
+
+    /// A parry box, grown.
+    fn of_aabb(aabb: &Aabb) -> Bounds {
+        Bounds::of_points(&[
+            crate::convert::vec_from_glam(aabb.mins),
+            crate::convert::vec_from_glam(aabb.maxs),
+        ])
+    }
+
+    /// True when the box holds no point (or is not finite).
+    pub fn is_empty(&self) -> bool {
+        (0..3)
+            .any(|i| !self.lo[i].is_finite() || !self.hi[i].is_finite() || self.lo[i] > self.hi[i])
+    }
+
+    /// The box grown by [`GROWTH`] of its largest coordinate.
+    fn grown(self) -> Bounds {
+        if self.is_empty() {
+            return Bounds::empty();
+        }
+        let big = self.lo.abs().max().max(self.hi.abs().max());
+        let m = up(big * GROWTH) + f64::MIN_POSITIVE;
+        Bounds {
+            lo: self.lo.map(|x| down(x - m)),
+            hi: self.hi.map(|x| up(x + m)),
+        }
+    }
+
+    /// A centre and half-extents whose box holds this one.
+    fn centre_half(&self) -> (Vector3<f64>, Vector3<f64>) {
+        let c = self.lo + (self.hi - self.lo) * 0.5;
+        let h = Vector3::from_fn(|i, _| up(self.hi[i] - c[i]).max(up(c[i] - self.lo[i])));
+        (c, h)
+    }
+
+    /// The length of the diagonal (to choose which side to split).
+    fn diagonal(&self) -> f64 {
+        if self.is_empty() {
+            0.0
+        } else {
+            (self.hi - self.lo).norm()
+        }
+    }
+
+    /// True when this box, grown by `skin`, meets the interval box `other`.
+    fn meets(&self, other: &[Interval; 3], skin: f64) -> bool {
+        !self.is_empty()
+            && (0..3).all(|i| {
+                other[i].lo <= up(self.hi[i] + skin) && down(self.lo[i] - skin) <= other[i].hi
+            })
+    }
+}
+
+/// A composite shape with a BVH.
+#[derive(Clone, Copy)]
+pub(crate) enum Tree<'s> {
+    Mesh(&'s TriMesh),
+    Line(&'s Polyline),
+    Parts(&'s Compound),
+}
+
+impl<'s> Tree<'s> {
+    fn bvh(&self) -> &'s Bvh {
+        match self {
+            Tree::Mesh(m) => m.bvh(),
+            Tree::Line(l) => l.bvh(),
+            Tree::Parts(c) => c.bvh(),
+        }
+    }
+}
+
+/// What one side of a pair stands for.
+#[derive(Clone, Copy)]
+pub(crate) enum Part<'s> {
+    /// A whole shape: convex, or a composite's root.
+    Shape(&'s dyn Shape),
+    /// A node of a composite's BVH.
+    Node(Tree<'s>, BvhNodeIndex),
+    /// The heightfield cells of rows `rows.0..rows.1`, columns `cols.0..cols.1`.
+    Cells {
+        field: &'s HeightField,
+        rows: (usize, usize),
+        cols: (usize, usize),
+    },
+    /// One triangle of a mesh or heightfield (parry's `f32` corners).
+    Triangle(Triangle),
+    /// One segment of a polyline.
+    Segment(Segment),
+}
+
+impl<'s> Part<'s> {
+    /// True when the part splits into children.
+    pub fn is_composite(&self) -> bool {
+        match self {
+            Part::Shape(s) => is_composite(*s),
+            Part::Node(..) | Part::Cells { .. } => true,
+            Part::Triangle(_) | Part::Segment(_) => false,
+        }
+    }
+
+    /// The part as a shape, when it is one piece.
+    pub fn shape(&self) -> Option<&dyn Shape> {
+        match self {
+            Part::Shape(s) if !is_composite(*s) => Some(*s),
+            Part::Triangle(t) => Some(t),
+            Part::Segment(s) => Some(s),
+            _ => None,
+        }
+    }
+}
+
+/// One side of a pair: a part in a frame, with its box in that frame.
+#[derive(Clone, Copy)]
+pub(crate) struct Item<'s> {
+    pub part: Part<'s>,
+    pub frame: u32,
+    pub bounds: Bounds,
+}
+
+impl<'s> Item<'s> {
+    /// A whole shape in `frame`.
+    pub fn whole(shape: &'s dyn Shape, frame: u32) -> Item<'s> {
+        let bounds = match shape.as_typed_shape() {
+            // The heightfield's own box (parry's `local_aabb` agrees).
+            TypedShape::HeightField(hf) => cells_bounds(hf, (0, hf.nrows()), (0, hf.ncols())),
+            _ => Bounds::of_aabb(&shape.compute_local_aabb()),
+        };
+        Item {
+            part: Part::Shape(shape),
+            frame,
+            bounds,
+        }
+    }
+}
+
+/// A child of a split part: what it is, its box in the parent's frame, and
+/// for a compound's part its index and pose in the parent's frame.
+#[derive(Clone, Copy)]
+pub(crate) struct Child<'s> {
+    pub part: Part<'s>,
+    pub bounds: Bounds,
+    pub local: Option<(u32, Isometry3<f64>)>,
+}
+
+/// True for the shapes this module splits.
+pub(crate) fn is_composite(shape: &dyn Shape) -> bool {
+    matches!(
+        shape.shape_type(),
+        ShapeType::TriMesh | ShapeType::Polyline | ShapeType::HeightField | ShapeType::Compound
+    )
+}
+
+/// The children of `part` (at most two) into `out`.
+pub(crate) fn children<'s>(part: &Part<'s>, out: &mut Vec<Child<'s>>) {
+    match *part {
+        Part::Shape(shape) => match shape.as_typed_shape() {
+            TypedShape::TriMesh(m) => tree_children(Tree::Mesh(m), None, out),
+            TypedShape::Polyline(l) => tree_children(Tree::Line(l), None, out),
+            TypedShape::Compound(c) => tree_children(Tree::Parts(c), None, out),
+            TypedShape::HeightField(hf) => cell_children(hf, (0, hf.nrows()), (0, hf.ncols()), out),
+            _ => {}
+        },
+        Part::Node(tree, node) => tree_children(tree, Some(node), out),
+        Part::Cells { field, rows, cols } => cell_children(field, rows, cols, out),
+        Part::Triangle(_) | Part::Segment(_) => {}
+    }
+}
+
+/// The children of a BVH node (`None`: the root).
+fn tree_children<'s>(tree: Tree<'s>, node: Option<BvhNodeIndex>, out: &mut Vec<Child<'s>>) {
+    let mut at_subtree_root = node.is_some();
+    tree.bvh()
+        .traverse_indexed(node, |n: &BvhNode, id: BvhNodeIndex| {
+            if at_subtree_root {
+                at_subtree_root = false;
+                return TraversalAction::Continue;
+            }
+            out.push(tree_child(tree, n, id));
+            TraversalAction::Prune
+        });
+}
+
+fn tree_child<'s>(tree: Tree<'s>, n: &BvhNode, id: BvhNodeIndex) -> Child<'s> {
+    let bounds = Bounds::of_aabb(&n.aabb());
+    let Some(leaf) = n.leaf_data() else {
+        return Child {
+            part: Part::Node(tree, id),
+            bounds,
+            local: None,
+        };
+    };
+    match tree {
+        Tree::Mesh(m) => Child {
+            part: Part::Triangle(m.triangle(leaf)),
+            bounds,
+            local: None,
+        },
+        Tree::Line(l) => Child {
+            part: Part::Segment(l.segment(leaf)),
+            bounds,
+            local: None,
+        },
+        Tree::Parts(c) => {
+            let (pose, shape) = &c.shapes()[leaf as usize];
+            let iso = iso_from_pose(pose);
+            let iso = Isometry3::from_parts(
+                iso.translation,
+                UnitQuaternion::new_normalize(iso.rotation.into_inner()),
+            );
+            Child {
+                part: Part::Shape(shape.as_ref()),
+                bounds,
+                local: Some((leaf, iso)),
+            }
+        }
+    }
+}
+
+/// The x (column `j`) or z (row `i`) coordinate of a grid line, in `f32`
+/// exactly as parry's `HeightField::triangles_at` computes it.
+fn grid_line(unit: f32, index: usize, scale: f32) -> f64 {
+    f64::from((-0.5 + unit * (index as f32)) * scale)
+}
+
+/// The box of heightfield cells `rows × cols` (half-open), grown.
+fn cells_bounds(hf: &HeightField, rows: (usize, usize), cols: (usize, usize)) -> Bounds {
+    if rows.0 >= rows.1 || cols.0 >= cols.1 {
+        return Bounds::empty();
+    }
+    let scale = hf.scale();
+    let heights = hf.heights();
+    let (mut y_lo, mut y_hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for i in rows.0..=rows.1 {
+        for j in cols.0..=cols.1 {
+            let y = f64::from(heights[(i, j)] * scale.y);
+            y_lo = y_lo.min(y);
+            y_hi = y_hi.max(y);
+        }
+    }
+    let (cw, ch) = (hf.unit_cell_width(), hf.unit_cell_height());
+    let x = [
+        grid_line(cw, cols.0, scale.x),
+        grid_line(cw, cols.1, scale.x),
+    ];
+    let z = [
+        grid_line(ch, rows.0, scale.z),
+        grid_line(ch, rows.1, scale.z),
+    ];
+    Bounds::of_points(&[
+        Vector3::new(x[0], y_lo, z[0]),
+        Vector3::new(x[1], y_hi, z[1]),
+    ])
+}
+
+fn cell_children<'s>(
+    hf: &'s HeightField,
+    rows: (usize, usize),
+    cols: (usize, usize),
+    out: &mut Vec<Child<'s>>,
+) {
+    let (nr, nc) = (rows.1.saturating_sub(rows.0), cols.1.saturating_sub(cols.0));
+    if nr == 0 || nc == 0 {
+        return;
+    }
+    if nr == 1 && nc == 1 {
+        let (left, right) = hf.triangles_at(rows.0, cols.0);
+        for t in [left, right].into_iter().flatten() {
+            let corners = [t.a, t.b, t.c].map(crate::convert::vec_from_glam);
+            out.push(Child {
+                part: Part::Triangle(t),
+                bounds: Bounds::of_points(&corners),
+                local: None,
+            });
+        }
+        return;
+    }
+    let halves = if nr >= nc {
+        let m = rows.0 + nr / 2;
+        [((rows.0, m), cols), ((m, rows.1), cols)]
+    } else {
+        let m = cols.0 + nc / 2;
+        [(rows, (cols.0, m)), (rows, (m, cols.1))]
+    };
+    for (rows, cols) in halves {
+        out.push(Child {
+            part: Part::Cells {
+                field: hf,
+                rows,
+                cols,
+            },
+            bounds: cells_bounds(hf, rows, cols),
+            local: None,
+        });
+    }
+}
+
+/// Which side of a composite pair to split: `true` for `b`.
+pub(crate) fn split_b(a: &Item, b: &Item) -> bool {
+    match (a.part.is_composite(), b.part.is_composite()) {
+        (true, false) => false,
+        (false, true) => true,
+        _ => b.bounds.diagonal() >= a.bounds.diagonal(),
+    }
+}
+
+/// The box `small` (in its own frame) carried into another frame by `rel`,
+/// as a centre and half-extents enclosed over the node.
+fn carried<E: Enclosure>(rel: &Pose<E>, small: &Bounds) -> (Vector3<E>, Vector3<E>) {
+    let (c, h) = small.centre_half();
+    let centre = rel.transform_point(&c);
+    let half = Vector3::from_fn(|i, _| {
+        rel.rotation[(i, 0)].abs() * h.x
+            + rel.rotation[(i, 1)].abs() * h.y
+            + rel.rotation[(i, 2)].abs() * h.z
+    });
+    (centre, half)
+}
+
+/// The six bounding axes of `small` (carried by `rel`) against `big`.
+pub(crate) fn bounding_axes<E: Enclosure>(
+    rel: &Pose<E>,
+    small: &Bounds,
+    big: &Bounds,
+    skin: f64,
+    out: &mut [E],
+) {
+    if small.is_empty() || big.is_empty() {
+        // Nothing to touch: every axis far positive.
+        out[..AXES].fill(E::constant(f64::MAX));
+        return;
+    }
+    let (centre, half) = carried(rel, small);
+    for i in 0..3 {
+        let (low, high) = (centre[i] - half[i], centre[i] + half[i]);
+        out[i] = -high + big.lo[i] - skin;
+        out[3 + i] = low - big.hi[i] - skin;
+    }
+}
+
+/// The swept box of `small` carried by `rel`, as intervals over the node.
+pub(crate) fn swept<E: Enclosure>(rel: &Pose<E>, small: &Bounds) -> [Interval; 3] {
+    if small.is_empty() {
+        return [Interval::new(f64::INFINITY, f64::INFINITY); 3];
+    }
+    let (centre, half) = carried(rel, small);
+    std::array::from_fn(|i| {
+        let (low, high) = ((centre[i] - half[i]).range(), (centre[i] + half[i]).range());
+        Interval::new(low.lo, high.hi)
+    })
+}
+
+/// True when the child's box meets the swept box.
+pub(crate) fn child_meets(child: &Child, sweep: &[Interval; 3], skin: f64) -> bool {
+    child.bounds.meets(sweep, skin)
+}
+
+/// Representative pieces of a shape: the kinds of leaf a split reaches,
+/// one of each type (a compound's parts recursively, a mesh's first
+/// triangle, …), for checking up front that every leaf pair has a family.
+fn leaf_kinds<'s>(shape: &'s dyn Shape, out: &mut Vec<Piece<'s>>) {
+    let mut push = |p: Piece<'s>| {
+        if !out
+            .iter()
+            .any(|q| q.shape().shape_type() == p.shape().shape_type())
+        {
+            out.push(p);
+        }
+    };
+    match shape.as_typed_shape() {
+        TypedShape::TriMesh(m) => {
+            if m.num_triangles() > 0 {
+                push(Piece::Triangle(m.triangle(0)));
+            }
+        }
+        TypedShape::HeightField(hf) => {
+            if let Some(t) = hf.triangles().next() {
+                push(Piece::Triangle(t));
+            }
+        }
+        TypedShape::Polyline(l) => {
+            if l.num_segments() > 0 {
+                push(Piece::Segment(l.segment(0)));
+            }
+        }
+        TypedShape::Compound(c) => {
+            for (_, part) in c.shapes() {
+                let mut inner = Vec::new();
+                leaf_kinds(part.as_ref(), &mut inner);
+                for p in inner {
+                    push(p);
+                }
+            }
+        }
+        _ => push(Piece::Shape(shape)),
+    }
+}
+
+/// A leaf piece, owned or borrowed.
+enum Piece<'s> {
+    Shape(&'s dyn Shape),
+    Triangle(Triangle),
+    Segment(Segment),
+}
+
+impl Piece<'_> {
+    fn shape(&self) -> &dyn Shape {
+        match self {
+            Piece::Shape(s) => *s,
+            Piece::Triangle(t) => t,
+            Piece::Segment(s) => s,
+        }
+    }
+}
+
+/// `Ok` when every kind of leaf pair that splitting `shape1` against
+/// `shape2` can reach has a gap family; the `Unsupported` error of the
+/// first that has none otherwise.
+pub(crate) fn check_leaves(
+    shape1: &dyn Shape,
+    shape2: &dyn Shape,
+    skin: f64,
+) -> Result<(), CcdError> {
+    let (mut k1, mut k2) = (Vec::new(), Vec::new());
+    leaf_kinds(shape1, &mut k1);
+    leaf_kinds(shape2, &mut k2);
+    for p in &k1 {
+        for q in &k2 {
+            super::build(p.shape(), q.shape(), skin)?;
+        }
+    }
+    Ok(())
+}
