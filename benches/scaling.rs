@@ -1,0 +1,146 @@
+//! How the cost grows with the work: (1) step time of the affine stage with
+//! 1 … 1,000 fast bodies; (2) time per query of one moving box against a
+//! floor of 2 … 131,072 triangles. Prints each series and its growth
+//! exponent (least-squares slope of log time against log size).
+//!
+//! `cargo bench --bench scaling`
+
+use affine_ccd::Motion;
+use affine_ccd::query::{QueryOptions, time_of_impact};
+use affine_ccd::rapier::AffineCcd;
+use nalgebra::{Isometry3, Point3, Vector3};
+use rapier3d::prelude::*;
+use std::time::Instant;
+
+/// Least-squares slope of `ln y` against `ln x`.
+fn growth(points: &[(f64, f64)]) -> f64 {
+    let n = points.len() as f64;
+    let (sx, sy) = points
+        .iter()
+        .fold((0.0, 0.0), |(a, b), (x, y)| (a + x.ln(), b + y.ln()));
+    let (mx, my) = (sx / n, sy / n);
+    let (mut num, mut den) = (0.0, 0.0);
+    for (x, y) in points {
+        num += (x.ln() - mx) * (y.ln() - my);
+        den += (x.ln() - mx).powi(2);
+    }
+    num / den
+}
+
+/// `n` balls fired at 150 m/s at a thin wall, one step timed (median of 5
+/// steps after the first).
+fn fast_bodies(n: usize) -> f64 {
+    let mut world = PhysicsWorld::default();
+    world.gravity = Vector::ZERO;
+    let mut ccd = AffineCcd::default();
+    ccd.install(&mut world);
+    let wall = world.insert_body(RigidBodyBuilder::fixed());
+    world.insert_collider(
+        ColliderBuilder::cuboid(0.05, 50.0, 50.0).translation(Vector::new(2.0, 0.0, 0.0)),
+        Some(wall),
+    );
+    let side = (n as f64).sqrt().ceil() as usize;
+    for i in 0..n {
+        let (y, z) = (
+            (i / side) as f32 * 0.5 - 20.0,
+            (i % side) as f32 * 0.5 - 20.0,
+        );
+        let body = world.insert_body(
+            RigidBodyBuilder::dynamic()
+                .translation(Vector::new(-1.0, y, z))
+                .linvel(Vector::new(150.0, 0.0, 0.0)),
+        );
+        world.insert_collider(ColliderBuilder::ball(0.1), Some(body));
+    }
+    let mut times = Vec::new();
+    for _ in 0..6 {
+        let start = Instant::now();
+        ccd.step(&mut world);
+        times.push(start.elapsed().as_secs_f64());
+    }
+    times.remove(0);
+    times.sort_by(f64::total_cmp);
+    times[times.len() / 2]
+}
+
+/// A flat floor of about `n` triangles over 100 m × 100 m.
+fn floor(n: usize) -> TriMesh {
+    let cells = ((n as f64 / 2.0).sqrt().ceil() as usize).max(1);
+    let step = 100.0 / cells as f32;
+    let mut vertices = Vec::new();
+    for i in 0..=cells {
+        for j in 0..=cells {
+            vertices.push(Vector::new(
+                i as f32 * step - 50.0,
+                0.0,
+                j as f32 * step - 50.0,
+            ));
+        }
+    }
+    let mut indices = Vec::new();
+    let row = cells as u32 + 1;
+    for i in 0..cells as u32 {
+        for j in 0..cells as u32 {
+            let a = i * row + j;
+            indices.push([a, a + 1, a + row]);
+            indices.push([a + 1, a + row + 1, a + row]);
+        }
+    }
+    TriMesh::new(vertices, indices).expect("a grid mesh")
+}
+
+/// Median time of one query: a box falling fast and spinning onto the floor.
+fn query_against(mesh: &TriMesh) -> f64 {
+    let body = Cuboid::new(Vector::new(0.5, 0.1, 0.3));
+    let start = Isometry3::translation(0.3, 1.0, -0.2);
+    let motion = Motion::from_velocities(
+        start,
+        Point3::new(0.3, 1.0, -0.2),
+        Vector3::new(3.0, -90.0, 1.0),
+        Vector3::new(5.0, 2.0, 20.0),
+        1.0 / 60.0,
+    )
+    .expect("finite");
+    let fixed = Motion::fixed(Isometry3::identity()).expect("finite");
+    let options = QueryOptions::default();
+    let mut times = Vec::new();
+    for _ in 0..21 {
+        let start = Instant::now();
+        let hit = time_of_impact(&body, &motion, mesh, &fixed, &options);
+        times.push(start.elapsed().as_secs_f64());
+        assert!(
+            matches!(hit, Ok(Some(_))),
+            "the box must hit the floor: {hit:?}"
+        );
+    }
+    times.sort_by(f64::total_cmp);
+    times[times.len() / 2]
+}
+
+fn main() {
+    println!("reproduce: cargo bench --bench scaling");
+    let mut series = Vec::new();
+    println!("{:>8} {:>14}", "bodies", "step ms");
+    for n in [1, 10, 30, 100, 300, 1000] {
+        let t = fast_bodies(n);
+        println!("{n:>8} {:>14.4}", t * 1e3);
+        series.push((n as f64, t));
+    }
+    println!(
+        "growth exponent in fast bodies: {:.2} (1 = linear)",
+        growth(&series[1..])
+    );
+
+    let mut series = Vec::new();
+    println!("{:>8} {:>14}", "triangles", "query µs");
+    for n in [2, 32, 512, 8192, 131_072] {
+        let mesh = floor(n);
+        let t = query_against(&mesh);
+        println!("{:>8} {:>14.2}", mesh.indices().len(), t * 1e6);
+        series.push((mesh.indices().len() as f64, t));
+    }
+    println!(
+        "growth exponent in target triangles: {:.2} (0 = flat, logarithmic shows as near 0)",
+        growth(&series)
+    );
+}

@@ -1,0 +1,43 @@
+//! Step time of every demo scene under `off` (rapier, no CCD), `rapier`
+//! (its own CCD) and `affine` (this crate's stage), measured in one run,
+//! reported as ratios: affine/rapier and affine/off.
+//!
+//! `cargo bench --bench scenes` (prints a table; no criterion: each scene
+//! run is already a median over its steps).
+
+use affine_ccd::scenes::{self, Backend, RunOptions, run_scene};
+
+/// Each scene is run this many times per backend; the smallest median
+/// step time is kept (the least disturbed run).
+const REPEATS: usize = 3;
+
+fn main() {
+    println!("reproduce: cargo bench --bench scenes");
+    println!(
+        "{:<26} {:>9} {:>9} {:>9} {:>13} {:>10}",
+        "scene", "off ms", "rapier ms", "affine ms", "affine/rapier", "affine/off"
+    );
+    for scene in scenes::all() {
+        let mut medians = [f64::NAN; 3];
+        for (slot, backend) in
+            medians
+                .iter_mut()
+                .zip([Backend::Off, Backend::Rapier, Backend::Affine])
+        {
+            *slot = (0..REPEATS)
+                .filter_map(|_| run_scene(&scene, backend, &RunOptions::default()).ok())
+                .map(|r| r.median_step_ms)
+                .fold(f64::INFINITY, f64::min);
+        }
+        let [off, rapier, affine] = medians;
+        println!(
+            "{:<26} {:>9.4} {:>9.4} {:>9.4} {:>13.2} {:>10.2}",
+            scene.name,
+            off,
+            rapier,
+            affine,
+            affine / rapier,
+            affine / off
+        );
+    }
+}
