@@ -11,10 +11,28 @@
 //! | pair | family | file |
 //! |---|---|---|
 //! | ball–ball | squared centre distance | `ball_ball.rs` |
+//! | ball–cuboid, ball–round cuboid | exact clamped distance in the box frame + 3 face slabs | `ball_cuboid.rs` |
+//! | cuboid–cuboid, zero skin | the 15 separating axes | `cuboid_cuboid.rs` |
+//! | half-space–any convex shape below | plane distance minus the support reach (exact) | `halfspace.rs` |
+//! | every other pair (cuboid–cuboid with a skin or a border included) of ball, cuboid, capsule, segment, triangle, convex polyhedron, cylinder, cone and their round variants | adaptive separating axes: parry's contact normal at the node's middle, fixed in the world, in `a`'s and in `b`'s frame | `support_map.rs` |
+//!
+//! The shapes' support functions over enclosures (the reach of each kind
+//! along a turning direction) are in `support.rs`. Half-space against
+//! half-space is not supported (they always meet unless exactly opposite).
 
 mod ball_ball;
+mod ball_cuboid;
+mod cuboid_cuboid;
+mod halfspace;
+mod support;
+mod support_map;
 
 pub(crate) use ball_ball::BallBall;
+pub(crate) use ball_cuboid::BallCuboid;
+pub(crate) use cuboid_cuboid::CuboidCuboid;
+pub(crate) use halfspace::HalfSpaceConvex;
+pub(crate) use support::{Convex, Core};
+pub(crate) use support_map::SupportMap;
 
 use crate::enclosure::{Enclosure, TimeSpan};
 use crate::error::{CcdError, check_finite};
@@ -26,7 +44,6 @@ pub(crate) struct Side<'p, E: Enclosure> {
     /// The shape frame's pose over the node.
     pub pose: &'p Pose<E>,
     /// The frame's whole motion (for adaptive choices at the node's middle).
-    #[allow(dead_code)] // read by the adaptive-axis families
     pub motion: &'p Motion,
 }
 
@@ -34,6 +51,10 @@ pub(crate) struct Side<'p, E: Enclosure> {
 #[derive(Clone, Debug)]
 pub(crate) enum PairGap {
     BallBall(BallBall),
+    BallCuboid(BallCuboid),
+    CuboidCuboid(CuboidCuboid),
+    HalfSpace(HalfSpaceConvex),
+    SupportMap(SupportMap),
 }
 
 impl PairGap {
@@ -41,6 +62,10 @@ impl PairGap {
     pub fn axis_count(&self) -> usize {
         match self {
             PairGap::BallBall(_) => BallBall::AXES,
+            PairGap::BallCuboid(_) => BallCuboid::AXES,
+            PairGap::CuboidCuboid(_) => CuboidCuboid::AXES,
+            PairGap::HalfSpace(_) => HalfSpaceConvex::AXES,
+            PairGap::SupportMap(_) => SupportMap::AXES,
         }
     }
 
@@ -55,6 +80,10 @@ impl PairGap {
     ) {
         match self {
             PairGap::BallBall(g) => g.eval(span, a, b, axes, out),
+            PairGap::BallCuboid(g) => g.eval(span, a, b, axes, out),
+            PairGap::CuboidCuboid(g) => g.eval(span, a, b, axes, out),
+            PairGap::HalfSpace(g) => g.eval(span, a, b, axes, out),
+            PairGap::SupportMap(g) => g.eval(span, a, b, axes, out),
         }
     }
 }
@@ -76,20 +105,71 @@ pub(crate) fn build(shape1: &dyn Shape, shape2: &dyn Shape, skin: f64) -> Result
             swapped: false,
         })
     };
+    let mirrored = |gap| Ok(Built { gap, swapped: true });
     match (shape1.as_typed_shape(), shape2.as_typed_shape()) {
         (T::Ball(b1), T::Ball(b2)) => straight(PairGap::BallBall(BallBall::new(
             radius(b1.radius)?,
             radius(b2.radius)?,
             skin,
         ))),
-        _ => Err(CcdError::Unsupported {
-            what: format!(
-                "{:?} against {:?}",
-                shape1.shape_type(),
-                shape2.shape_type()
-            ),
-        }),
+        (T::HalfSpace(h), _) => match Convex::from_shape(shape2)? {
+            Some(c) => straight(PairGap::HalfSpace(half_space(h, c, skin)?)),
+            None => unsupported(shape1, shape2),
+        },
+        (_, T::HalfSpace(h)) => match Convex::from_shape(shape1)? {
+            Some(c) => mirrored(PairGap::HalfSpace(half_space(h, c, skin)?)),
+            None => unsupported(shape1, shape2),
+        },
+        _ => match (Convex::from_shape(shape1)?, Convex::from_shape(shape2)?) {
+            (Some(c1), Some(c2)) => match (&c1.core, &c2.core) {
+                (Core::Point, Core::Cuboid(h)) => straight(PairGap::BallCuboid(BallCuboid::new(
+                    c1.border, *h, c2.border, skin,
+                ))),
+                (Core::Cuboid(h), Core::Point) => mirrored(PairGap::BallCuboid(BallCuboid::new(
+                    c2.border, *h, c1.border, skin,
+                ))),
+                // The 15 axes are exact for touching, not for distance:
+                // with a skin or a border, corners would count as close
+                // up to √3 times too early; the adaptive axes are exact.
+                (Core::Cuboid(h1), Core::Cuboid(h2))
+                    if skin == 0.0 && c1.border == 0.0 && c2.border == 0.0 =>
+                {
+                    straight(PairGap::CuboidCuboid(CuboidCuboid::new(
+                        *h1, c1.border, *h2, c2.border, skin,
+                    )))
+                }
+                _ => straight(PairGap::SupportMap(SupportMap::new(
+                    c1, shape1, c2, shape2, skin,
+                ))),
+            },
+            _ => unsupported(shape1, shape2),
+        },
     }
+}
+
+fn unsupported(shape1: &dyn Shape, shape2: &dyn Shape) -> Result<Built, CcdError> {
+    Err(CcdError::Unsupported {
+        what: format!(
+            "{:?} against {:?}",
+            shape1.shape_type(),
+            shape2.shape_type()
+        ),
+    })
+}
+
+/// The half-space family for a half-space against a convex shape.
+fn half_space(
+    h: &rapier3d::parry::shape::HalfSpace,
+    other: Convex,
+    skin: f64,
+) -> Result<HalfSpaceConvex, CcdError> {
+    let n = h.normal;
+    let normal = nalgebra::Vector3::new(
+        check_finite("half-space normal", f64::from(n.x))?,
+        check_finite("half-space normal", f64::from(n.y))?,
+        check_finite("half-space normal", f64::from(n.z))?,
+    );
+    Ok(HalfSpaceConvex::new(normal, other, skin))
 }
 
 /// A length of a shape (radius, half-extent) checked finite and `≥ 0`.
