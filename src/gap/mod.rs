@@ -11,22 +11,40 @@
 //! | pair | family | file |
 //! |---|---|---|
 //! | ball–ball | squared centre distance | `ball_ball.rs` |
+//! | ball–cuboid, ball–round cuboid | exact clamped distance in the box frame + 3 face slabs | `ball_cuboid.rs` |
+//! | cuboid–cuboid, zero skin | the 15 separating axes | `cuboid_cuboid.rs` |
 //! | ball–triangle | vertex–face axes, radius as skin | `ball_triangle.rs` |
 //! | ball–segment | end planes + adaptive direction | `ball_segment.rs` |
 //! | triangle–triangle | face normals, edge crosses, adaptive | `triangle_triangle.rs` |
+//! | half-space–any convex shape | plane distance minus the support reach (exact) | `halfspace.rs` |
+//! | every other pair (cuboid–cuboid with a skin or a border included) of ball, cuboid, capsule, segment, triangle, convex polyhedron, cylinder, cone and their round variants | adaptive separating axes: parry's contact normal at the node's middle, fixed in the world, in `a`'s and in `b`'s frame | `support_map.rs` |
 //! | vertex–face, edge–edge (linear vertices) | primitive axes | `primitives.rs` |
-//! | shape/mesh–composite | bounding gap, expanded through the BVH | `composite.rs` |
+//! | shape/mesh–composite (TriMesh, HeightField, Polyline, Compound) | bounding gap, expanded through the BVH | `composite.rs` |
+//!
+//! The shapes' support functions over enclosures (the reach of each kind
+//! along a turning direction) are in `support.rs`. Half-space against
+//! half-space is not supported (they always meet unless exactly opposite).
 
 mod ball_ball;
+mod ball_cuboid;
 mod ball_segment;
 mod ball_triangle;
 pub(crate) mod composite;
+mod cuboid_cuboid;
+mod halfspace;
 pub(crate) mod primitives;
+mod support;
+mod support_map;
 mod triangle_triangle;
 
 pub(crate) use ball_ball::BallBall;
+pub(crate) use ball_cuboid::BallCuboid;
 pub(crate) use ball_segment::BallSegment;
 pub(crate) use ball_triangle::BallTriangle;
+pub(crate) use cuboid_cuboid::CuboidCuboid;
+pub(crate) use halfspace::HalfSpaceConvex;
+pub(crate) use support::{Convex, Core};
+pub(crate) use support_map::SupportMap;
 pub(crate) use triangle_triangle::TriangleTriangle;
 
 use crate::convert::vec_from_glam;
@@ -45,7 +63,6 @@ pub(crate) struct Side<'p, E: Enclosure> {
     /// product per node for balls).
     pub pose: &'p Pose<E>,
     /// The frame's whole motion (for adaptive choices at the node's middle).
-    #[allow(dead_code)] // read by the adaptive-axis families
     pub motion: &'p Motion,
 }
 
@@ -56,6 +73,10 @@ pub(crate) enum PairGap {
     BallTriangle(BallTriangle),
     BallSegment(BallSegment),
     TriangleTriangle(TriangleTriangle),
+    BallCuboid(BallCuboid),
+    CuboidCuboid(CuboidCuboid),
+    HalfSpace(HalfSpaceConvex),
+    SupportMap(SupportMap),
 }
 
 impl PairGap {
@@ -66,6 +87,10 @@ impl PairGap {
             PairGap::BallTriangle(_) => BallTriangle::AXES,
             PairGap::BallSegment(_) => BallSegment::AXES,
             PairGap::TriangleTriangle(_) => TriangleTriangle::AXES,
+            PairGap::BallCuboid(_) => BallCuboid::AXES,
+            PairGap::CuboidCuboid(_) => CuboidCuboid::AXES,
+            PairGap::HalfSpace(_) => HalfSpaceConvex::AXES,
+            PairGap::SupportMap(_) => SupportMap::AXES,
         }
     }
 
@@ -73,7 +98,6 @@ impl PairGap {
     pub fn reads_rotation(&self) -> [bool; 2] {
         match self {
             PairGap::BallBall(_) => [false, false],
-            #[allow(unreachable_patterns)]
             _ => [true, true],
         }
     }
@@ -92,6 +116,10 @@ impl PairGap {
             PairGap::BallTriangle(g) => g.eval(span, a, b, axes, out),
             PairGap::BallSegment(g) => g.eval(span, a, b, axes, out),
             PairGap::TriangleTriangle(g) => g.eval(span, a, b, axes, out),
+            PairGap::BallCuboid(g) => g.eval(span, a, b, axes, out),
+            PairGap::CuboidCuboid(g) => g.eval(span, a, b, axes, out),
+            PairGap::HalfSpace(g) => g.eval(span, a, b, axes, out),
+            PairGap::SupportMap(g) => g.eval(span, a, b, axes, out),
         }
     }
 }
@@ -113,7 +141,7 @@ pub(crate) fn build(shape1: &dyn Shape, shape2: &dyn Shape, skin: f64) -> Result
             swapped: false,
         })
     };
-    let swapped = |gap| Ok(Built { gap, swapped: true });
+    let mirrored = |gap| Ok(Built { gap, swapped: true });
     match (shape1.as_typed_shape(), shape2.as_typed_shape()) {
         (T::Ball(b1), T::Ball(b2)) => straight(PairGap::BallBall(BallBall::new(
             radius(b1.radius)?,
@@ -121,20 +149,70 @@ pub(crate) fn build(shape1: &dyn Shape, shape2: &dyn Shape, skin: f64) -> Result
             skin,
         ))),
         (T::Ball(b), T::Triangle(t)) => straight(ball_triangle(b, t, skin)?),
-        (T::Triangle(t), T::Ball(b)) => swapped(ball_triangle(b, t, skin)?),
+        (T::Triangle(t), T::Ball(b)) => mirrored(ball_triangle(b, t, skin)?),
         (T::Ball(b), T::Segment(s)) => straight(ball_segment(b, s, skin)?),
-        (T::Segment(s), T::Ball(b)) => swapped(ball_segment(b, s, skin)?),
+        (T::Segment(s), T::Ball(b)) => mirrored(ball_segment(b, s, skin)?),
         (T::Triangle(t1), T::Triangle(t2)) => straight(PairGap::TriangleTriangle(
             TriangleTriangle::new(corners(t1)?, corners(t2)?, skin),
         )),
-        _ => Err(CcdError::Unsupported {
-            what: format!(
-                "{:?} against {:?}",
-                shape1.shape_type(),
-                shape2.shape_type()
-            ),
-        }),
+        (T::HalfSpace(h), _) => match Convex::from_shape(shape2)? {
+            Some(c) => straight(PairGap::HalfSpace(half_space(h, c, skin)?)),
+            None => unsupported(shape1, shape2),
+        },
+        (_, T::HalfSpace(h)) => match Convex::from_shape(shape1)? {
+            Some(c) => mirrored(PairGap::HalfSpace(half_space(h, c, skin)?)),
+            None => unsupported(shape1, shape2),
+        },
+        _ => match (Convex::from_shape(shape1)?, Convex::from_shape(shape2)?) {
+            (Some(c1), Some(c2)) => match (&c1.core, &c2.core) {
+                (Core::Point, Core::Cuboid(h)) => straight(PairGap::BallCuboid(BallCuboid::new(
+                    c1.border, *h, c2.border, skin,
+                ))),
+                (Core::Cuboid(h), Core::Point) => mirrored(PairGap::BallCuboid(BallCuboid::new(
+                    c2.border, *h, c1.border, skin,
+                ))),
+                // The 15 axes are exact for touching, not for distance:
+                // with a skin or a border, corners would count as close
+                // up to √3 times too early; the adaptive axes are exact.
+                (Core::Cuboid(h1), Core::Cuboid(h2))
+                    if skin == 0.0 && c1.border == 0.0 && c2.border == 0.0 =>
+                {
+                    straight(PairGap::CuboidCuboid(CuboidCuboid::new(
+                        *h1, c1.border, *h2, c2.border, skin,
+                    )))
+                }
+                _ => straight(PairGap::SupportMap(SupportMap::new(
+                    c1, shape1, c2, shape2, skin,
+                ))),
+            },
+            _ => unsupported(shape1, shape2),
+        },
     }
+}
+
+fn unsupported(shape1: &dyn Shape, shape2: &dyn Shape) -> Result<Built, CcdError> {
+    Err(CcdError::Unsupported {
+        what: format!(
+            "{:?} against {:?}",
+            shape1.shape_type(),
+            shape2.shape_type()
+        ),
+    })
+}
+
+/// The half-space family for a half-space against a convex shape.
+fn half_space(
+    h: &rapier3d::parry::shape::HalfSpace,
+    other: Convex,
+    skin: f64,
+) -> Result<HalfSpaceConvex, CcdError> {
+    let n = h.normal;
+    let normal = nalgebra::Vector3::new(
+        check_finite("half-space normal", f64::from(n.x))?,
+        check_finite("half-space normal", f64::from(n.y))?,
+        check_finite("half-space normal", f64::from(n.z))?,
+    );
+    Ok(HalfSpaceConvex::new(normal, other, skin))
 }
 
 /// A length of a shape (radius, half-extent) checked finite and `≥ 0`.

@@ -1,0 +1,296 @@
+//! Convex shapes as support functions over enclosures.
+//!
+//! A convex shape `S` in its own frame is known to the gap families through
+//! its support function `h(d) = max_{x ∈ S} x·d`: the farthest the shape
+//! reaches along `d`. For a shape posed by `x ↦ R·x + t`, its reach along a
+//! world direction `n` is `t·n + h(Rᵀn)`, so a separating-axis gap needs
+//! nothing else. Here `d` is an enclosure (it turns with the body), and the
+//! result is an enclosure of an **upper bound** of `h(d)` for every time of
+//! the node, which is the safe side for a gap (a larger reach only makes the
+//! gap smaller).
+//!
+//! Every kind is a *core* (a point, a box, a segment, ...) plus a *border*:
+//! the radius of a ball swept over the core. A ball is a point with a
+//! border, a capsule a segment with one, and parry's `Round*` shapes are
+//! their inner shape with theirs. The border's reach is `border·|d|`.
+//!
+//! | kind | core | `h(d)` of the core |
+//! |---|---|---|
+//! | ball | point | `0` |
+//! | cuboid (half-extents `e`) | box | `Σ e_i·|d_i|` |
+//! | capsule, segment | segment `a b` | `max(a·d, b·d)` |
+//! | triangle | triangle `a b c` | `max(a·d, b·d, c·d)` |
+//! | convex polyhedron | vertices | `max_v v·d` |
+//! | cylinder (axis y, half-height `h`, radius `r`) | | `h·|d_y| + r·√(d_x² + d_z²)` |
+//! | cone (apex at `+h` on y, base radius `r` at `−h`) | | `max(h·d_y, −h·d_y + r·√(d_x² + d_z²))` |
+//!
+//! The callers know `|d|` in advance: `d` is a fixed vector turned by
+//! rotations, so `|d|` equals the fixed vector's norm. `√(d_x² + d_z²)` is
+//! then taken as `√(|d|² − d_y²)`, one square instead of two, and the
+//! border's `|d|` costs nothing.
+
+use crate::enclosure::rounding::up;
+use crate::enclosure::{Enclosure, Interval};
+use crate::error::{CcdError, check_finite};
+use nalgebra::{Matrix3, Vector3};
+use rapier3d::parry::math::Vector;
+use rapier3d::parry::shape::{Shape, TypedShape};
+use std::sync::Arc;
+
+use super::length;
+
+/// How far from orthonormal the rotations the core takes as exact may be,
+/// relative. A motion's start matrix comes from a unit quaternion in `f64`
+/// (a few ulps, ~1e-15, from orthonormal); the turn over the step is
+/// enclosed exactly. Formulas that assume `|R·v| = |v|` or `RᵀR = I` are
+/// off by at most this share of the lengths involved, so each family pads
+/// its skin by `ORTHO_SLACK·(extents + skin)`: a thousandfold margin.
+pub(crate) const ORTHO_SLACK: f64 = 1.0e-12;
+
+/// The shape without its border.
+#[derive(Clone, Debug)]
+pub(crate) enum Core {
+    /// A single point at the origin (a ball's centre).
+    Point,
+    /// A box centred at the origin with these half-extents (metres).
+    Cuboid(Vector3<f64>),
+    /// A segment between two points.
+    Segment([Vector3<f64>; 2]),
+    /// A triangle.
+    Triangle([Vector3<f64>; 3]),
+    /// The convex hull of these vertices.
+    Polyhedron(Arc<[Vector3<f64>]>),
+    /// A cylinder along y.
+    Cylinder { half_height: f64, radius: f64 },
+    /// A cone along y, apex at `+half_height`.
+    Cone { half_height: f64, radius: f64 },
+}
+
+/// A convex shape: a core plus a border radius (metres).
+#[derive(Clone, Debug)]
+pub(crate) struct Convex {
+    pub core: Core,
+    pub border: f64,
+}
+
+fn point(what: &'static str, v: Vector) -> Result<Vector3<f64>, CcdError> {
+    Ok(Vector3::new(
+        check_finite(what, f64::from(v.x))?,
+        check_finite(what, f64::from(v.y))?,
+        check_finite(what, f64::from(v.z))?,
+    ))
+}
+
+fn half_extents(v: Vector) -> Result<Vector3<f64>, CcdError> {
+    Ok(Vector3::new(
+        length("cuboid half-extent", v.x)?,
+        length("cuboid half-extent", v.y)?,
+        length("cuboid half-extent", v.z)?,
+    ))
+}
+
+fn vertices(points: &[Vector]) -> Result<Core, CcdError> {
+    let vs = points
+        .iter()
+        .map(|p| point("convex polyhedron vertex", *p))
+        .collect::<Result<Vec<_>, _>>()?;
+    if vs.is_empty() {
+        // No vertex: nothing to reach. parry never builds one, but a point
+        // at the origin is the safe reading (never smaller than nothing).
+        return Ok(Core::Point);
+    }
+    Ok(Core::Polyhedron(vs.into()))
+}
+
+fn triangle(a: Vector, b: Vector, c: Vector) -> Result<Core, CcdError> {
+    Ok(Core::Triangle([
+        point("triangle vertex", a)?,
+        point("triangle vertex", b)?,
+        point("triangle vertex", c)?,
+    ]))
+}
+
+impl Convex {
+    /// The shape as a core and a border, or `None` for kinds that are not
+    /// bounded convex shapes (half-spaces, meshes, compounds, custom).
+    pub fn from_shape(shape: &dyn Shape) -> Result<Option<Convex>, CcdError> {
+        use TypedShape as T;
+        let round = |core, border: f32| -> Result<Option<Convex>, CcdError> {
+            Ok(Some(Convex {
+                core,
+                border: length("border radius", border)?,
+            }))
+        };
+        match shape.as_typed_shape() {
+            T::Ball(b) => round(Core::Point, b.radius),
+            T::Cuboid(c) => round(Core::Cuboid(half_extents(c.half_extents)?), 0.0),
+            T::Capsule(c) => round(
+                Core::Segment([
+                    point("capsule end", c.segment.a)?,
+                    point("capsule end", c.segment.b)?,
+                ]),
+                c.radius,
+            ),
+            T::Segment(s) => round(
+                Core::Segment([point("segment end", s.a)?, point("segment end", s.b)?]),
+                0.0,
+            ),
+            T::Triangle(t) => round(triangle(t.a, t.b, t.c)?, 0.0),
+            T::ConvexPolyhedron(p) => round(vertices(p.points())?, 0.0),
+            T::Cylinder(c) => round(
+                Core::Cylinder {
+                    half_height: length("cylinder half-height", c.half_height)?,
+                    radius: length("cylinder radius", c.radius)?,
+                },
+                0.0,
+            ),
+            T::Cone(c) => round(
+                Core::Cone {
+                    half_height: length("cone half-height", c.half_height)?,
+                    radius: length("cone radius", c.radius)?,
+                },
+                0.0,
+            ),
+            T::RoundCuboid(r) => round(
+                Core::Cuboid(half_extents(r.inner_shape.half_extents)?),
+                r.border_radius,
+            ),
+            T::RoundTriangle(r) => {
+                let t = &r.inner_shape;
+                round(triangle(t.a, t.b, t.c)?, r.border_radius)
+            }
+            T::RoundCylinder(r) => round(
+                Core::Cylinder {
+                    half_height: length("cylinder half-height", r.inner_shape.half_height)?,
+                    radius: length("cylinder radius", r.inner_shape.radius)?,
+                },
+                r.border_radius,
+            ),
+            T::RoundCone(r) => round(
+                Core::Cone {
+                    half_height: length("cone half-height", r.inner_shape.half_height)?,
+                    radius: length("cone radius", r.inner_shape.radius)?,
+                },
+                r.border_radius,
+            ),
+            T::RoundConvexPolyhedron(r) => {
+                round(vertices(r.inner_shape.points())?, r.border_radius)
+            }
+            _ => Ok(None),
+        }
+    }
+
+    /// An enclosure of an upper bound of `h(d)`, the shape's reach along
+    /// `d`, given `norm ≥ |d|` for the true `d` at every time of the node.
+    pub fn support<E: Enclosure>(&self, d: &Vector3<E>, norm: f64) -> E {
+        let core = match &self.core {
+            Core::Point => E::zero(),
+            Core::Cuboid(e) => d.x.abs() * e.x + d.y.abs() * e.y + d.z.abs() * e.z,
+            Core::Segment([a, b]) => dot(d, a).max(dot(d, b)),
+            Core::Triangle([a, b, c]) => dot(d, a).max(dot(d, b)).max(dot(d, c)),
+            Core::Polyhedron(vs) => polyhedron_support(vs, d),
+            Core::Cylinder {
+                half_height,
+                radius,
+            } => d.y.abs() * *half_height + radial(d, norm) * *radius,
+            Core::Cone {
+                half_height,
+                radius,
+            } => {
+                let apex = d.y * *half_height;
+                let rim = radial(d, norm) * *radius - apex;
+                apex.max(rim)
+            }
+        };
+        if self.border > 0.0 {
+            core + up(self.border * norm)
+        } else {
+            core
+        }
+    }
+
+    /// An upper bound of `h(d)` for a fixed `d`.
+    pub fn support_f64(&self, d: &Vector3<f64>) -> f64 {
+        let norm = norm_up(d);
+        self.support(&d.map(Interval::point), norm).range().hi
+    }
+
+    /// An upper bound of `|x|` over the shape (metres): how far it reaches
+    /// from its frame's origin.
+    pub fn extent(&self) -> f64 {
+        let core = match &self.core {
+            Core::Point => 0.0,
+            Core::Cuboid(e) => e.norm(),
+            Core::Segment(ps) => ps.iter().map(|p| p.norm()).fold(0.0, f64::max),
+            Core::Triangle(ps) => ps.iter().map(|p| p.norm()).fold(0.0, f64::max),
+            Core::Polyhedron(ps) => ps.iter().map(|p| p.norm()).fold(0.0, f64::max),
+            Core::Cylinder {
+                half_height,
+                radius,
+            }
+            | Core::Cone {
+                half_height,
+                radius,
+            } => half_height.hypot(*radius),
+        };
+        // A relative error of a few ulps in the norms is covered many times.
+        up((core + self.border) * (1.0 + 1.0e-14))
+    }
+}
+
+/// `v·w` for an enclosed `v` and a fixed `w`.
+pub(crate) fn dot<E: Enclosure>(v: &Vector3<E>, w: &Vector3<f64>) -> E {
+    v.x * w.x + v.y * w.y + v.z * w.z
+}
+
+/// `R·w` for an enclosed `R` and a fixed `w`.
+pub(crate) fn mul<E: Enclosure>(r: &Matrix3<E>, w: &Vector3<f64>) -> Vector3<E> {
+    Vector3::from_fn(|i, _| r[(i, 0)] * w.x + r[(i, 1)] * w.y + r[(i, 2)] * w.z)
+}
+
+/// `Rᵀ·w` for an enclosed `R` and a fixed `w`.
+pub(crate) fn tr_mul<E: Enclosure>(r: &Matrix3<E>, w: &Vector3<f64>) -> Vector3<E> {
+    Vector3::from_fn(|j, _| r[(0, j)] * w.x + r[(1, j)] * w.y + r[(2, j)] * w.z)
+}
+
+/// An upper bound of `|v|`: `norm()` is within two ulps of the truth.
+pub(crate) fn norm_up(v: &Vector3<f64>) -> f64 {
+    up(v.norm() * (1.0 + 4.0 * f64::EPSILON))
+}
+
+/// `√(d_x² + d_z²)` as `√(|d|² − d_y²)`, given `norm ≥ |d|`. Where the
+/// square root cannot be taken, `norm` itself bounds it.
+fn radial<E: Enclosure>(d: &Vector3<E>, norm: f64) -> E {
+    (E::constant(up(norm * norm)) - d.y.sqr())
+        .sqrt()
+        .unwrap_or(E::constant(norm))
+}
+
+/// `max_v v·d` over the vertices. Vertices that an interval bound shows to
+/// be below another vertex's lower bound are skipped: they can never be the
+/// maximum on this node, and skipping them keeps the enclosure affine.
+fn polyhedron_support<E: Enclosure>(vs: &[Vector3<f64>], d: &Vector3<E>) -> E {
+    if vs.len() <= 4 {
+        return vs[1..].iter().fold(dot(d, &vs[0]), |m, v| m.max(dot(d, v)));
+    }
+    let di = d.map(|x| x.range());
+    let bound = |v: &Vector3<f64>| di.x * v.x + di.y * v.y + di.z * v.z;
+    let best_lo = vs
+        .iter()
+        .map(|v| bound(v).lo)
+        .fold(f64::NEG_INFINITY, f64::max);
+    let mut result: Option<E> = None;
+    for v in vs {
+        if bound(v).hi < best_lo {
+            continue;
+        }
+        let x = dot(d, v);
+        result = Some(match result {
+            Some(m) => m.max(x),
+            None => x,
+        });
+    }
+    // A NaN-free bound always keeps the vertex that set `best_lo`; should
+    // every bound be unbounded, fall back to the whole line.
+    result.unwrap_or(E::constant(f64::INFINITY))
+}

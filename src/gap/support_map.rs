@@ -1,0 +1,164 @@
+//! Any two convex shapes: adaptive separating axes (DESIGN.md §5).
+//!
+//! Capsules, cylinders, cones, convex hulls, segments, triangles and the
+//! rounded shapes have no finite complete set of separating axes. But *any*
+//! direction `n` gives a lower bound of the distance: the shapes are apart
+//! by at least `n·(t_b − t_a) − h_a(R_aᵀn) − h_b(−R_bᵀn)` (over `|n|`),
+//! with `h` each shape's support function ([`super::support`]). So the
+//! axes here are sound whatever direction they use; only their tightness
+//! depends on the choice.
+//!
+//! On each node the direction comes from parry's contact query at the
+//! exact poses of the node's middle time: the closest-points normal when
+//! the shapes are apart there (the best single separating direction), the
+//! penetration normal when they overlap (no direction separates then, but
+//! the approach direction still clips the node well). As nodes shrink the
+//! direction becomes right for the whole node, and the axis positive
+//! wherever the shapes are truly apart. The same direction is used three
+//! ways, because the best separating direction turns with the bodies:
+//!
+//! 0. fixed in the world: `n`;
+//! 1. fixed in `a`'s frame: `n(τ) = R_a(τ)·m`, `m = R_a(mid)ᵀn` — exact
+//!    for `a`'s own support, right when `a` spins and `b` does not;
+//! 2. fixed in `b`'s frame: `n(τ) = R_b(τ)·k`, `k = R_b(mid)ᵀn`.
+//!
+//! Cost: one parry contact query (GJK, EPA when overlapping) per node plus
+//! about 70 enclosure products.
+
+use super::Side;
+use super::support::{Convex, ORTHO_SLACK, dot, mul, norm_up, tr_mul};
+use crate::convert::{pose_from_iso, vec_from_glam};
+use crate::enclosure::rounding::up;
+use crate::enclosure::{Enclosure, TimeSpan};
+use crate::motion::Trajectory;
+use nalgebra::{Isometry3, Vector3};
+use rapier3d::parry::math::Pose as ParryPose;
+use rapier3d::parry::shape::Shape;
+use std::fmt;
+use std::sync::Arc;
+
+/// How far apart (metres) parry's contact query still reports the closest
+/// points; farther pairs take the direction of their frames' origins, good
+/// enough at such distances. (`f32::MAX` overflows in some of parry's
+/// paths, which then answer nothing.)
+const PREDICTION: f32 = 1.0e6;
+
+/// Two convex shapes, each a core plus a border.
+#[derive(Clone)]
+pub(crate) struct SupportMap {
+    a: Convex,
+    b: Convex,
+    /// parry's own shapes, for the direction query.
+    shape_a: Arc<dyn Shape>,
+    shape_b: Arc<dyn Shape>,
+    /// `skin` plus the orthonormality pad, metres.
+    skin: f64,
+}
+
+impl fmt::Debug for SupportMap {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("SupportMap")
+            .field("a", &self.a)
+            .field("b", &self.b)
+            .field("skin", &self.skin)
+            .finish_non_exhaustive()
+    }
+}
+
+impl SupportMap {
+    pub const AXES: usize = 3;
+
+    pub fn new(
+        a: Convex,
+        shape_a: &dyn Shape,
+        b: Convex,
+        shape_b: &dyn Shape,
+        skin: f64,
+    ) -> SupportMap {
+        let pad = up(ORTHO_SLACK * up(up(a.extent() + b.extent()) + skin));
+        SupportMap {
+            a,
+            b,
+            shape_a: Arc::from(shape_a.clone_dyn()),
+            shape_b: Arc::from(shape_b.clone_dyn()),
+            skin: up(skin + pad),
+        }
+    }
+
+    /// A unit direction from `a` towards `b`, in `a`'s frame, at the poses
+    /// `ia`, `ib`. Never fails: when parry has no answer, the direction of
+    /// the frames' origins, or any axis.
+    fn direction(&self, ia: &Isometry3<f64>, ib: &Isometry3<f64>) -> Vector3<f64> {
+        let rel = ia.inv_mul(ib);
+        let pos12 = pose_from_iso(&rel);
+        let query = || {
+            rapier3d::parry::query::contact(
+                &ParryPose::IDENTITY,
+                &*self.shape_a,
+                &pos12,
+                &*self.shape_b,
+                PREDICTION,
+            )
+        };
+        // parry's queries are not written to be total on degenerate shapes;
+        // a panic there only costs us the hint, not the answer.
+        let contact = std::panic::catch_unwind(std::panic::AssertUnwindSafe(query));
+        if let Ok(Ok(Some(c))) = contact {
+            let n = vec_from_glam(c.normal1);
+            if let Some(n) = n.try_normalize(1.0e-6) {
+                return n;
+            }
+        }
+        rel.translation
+            .vector
+            .try_normalize(1.0e-300)
+            .unwrap_or_else(Vector3::x)
+    }
+
+    pub fn eval<E: Enclosure>(
+        &self,
+        span: TimeSpan,
+        a: &Side<E>,
+        b: &Side<E>,
+        axes: u64,
+        out: &mut [E],
+    ) {
+        let mid = span.lo + 0.5 * (span.hi - span.lo);
+        let (ia, ib) = (a.motion.pose_at(mid), b.motion.pose_at(mid));
+        let m = self.direction(&ia, &ib);
+        let n = ia.rotation * m;
+        if axes & 1 != 0 {
+            let norm = norm_up(&n);
+            let along = dot(&(b.pose.translation - a.pose.translation), &n);
+            let da = tr_mul(&a.pose.rotation, &n);
+            let db = -tr_mul(&b.pose.rotation, &n);
+            out[0] = along
+                - self.a.support(&da, norm)
+                - self.b.support(&db, norm)
+                - up(self.skin * norm);
+        }
+        if axes & 0b110 == 0 {
+            return;
+        }
+        let rel = a.pose.relative(b.pose);
+        let (r, t) = (&rel.rotation, &rel.translation);
+        if axes & 0b10 != 0 {
+            let norm = norm_up(&m);
+            let db = -tr_mul(r, &m);
+            out[1] = dot(t, &m)
+                - self.a.support_f64(&m)
+                - self.b.support(&db, norm)
+                - up(self.skin * norm);
+        }
+        if axes & 0b100 != 0 {
+            let k = ib.rotation.inverse() * n;
+            let norm = norm_up(&k);
+            let da = mul(r, &k);
+            let along = t.x * da.x + t.y * da.y + t.z * da.z;
+            out[2] = along
+                - self.a.support(&da, norm)
+                - self.b.support_f64(&(-k))
+                - up(self.skin * norm);
+        }
+    }
+}
