@@ -81,6 +81,7 @@ fn main() {
 
     let mut cases: Vec<Case> = Vec::new();
     let mut kinds_used = Vec::new();
+    let mut per_kind_rows = Vec::new();
     for (k, kind) in pair_kinds().iter().enumerate() {
         let some = common::cases(kind, per_kind, 1000 + k as u64);
         if some.is_empty() {
@@ -88,6 +89,7 @@ fn main() {
             continue;
         }
         kinds_used.push(format!("{} ({})", kind.name, some.len()));
+        per_kind_rows.push(kind_summary(kind.name, &some));
         cases.extend(some);
     }
     let hits = cases
@@ -177,11 +179,80 @@ fn main() {
         )
         .unwrap();
     }
+    writeln!(
+        md,
+        "\n## Per pair kind, affine at ε = 1e-4 against parry on the same cases\n"
+    )
+    .unwrap();
+    writeln!(md, "| pair kind | cases | affine median µs | parry nonlinear µs | ratio (parry/affine) | parry sweep µs | affine median evals | affine max error | affine FN | affine FP | parry nonlinear FN | parry sweep FN |").unwrap();
+    writeln!(md, "|---|---|---|---|---|---|---|---|---|---|---|---|").unwrap();
+    for line in &per_kind_rows {
+        writeln!(md, "{line}").unwrap();
+    }
     print!("{md}");
     std::fs::create_dir_all("docs").ok();
     std::fs::write("docs/accuracy.md", &md).expect("write docs/accuracy.md");
     std::fs::write("docs/accuracy.svg", plot(&rows)).expect("write docs/accuracy.svg");
     eprintln!("wrote docs/accuracy.md and docs/accuracy.svg");
+}
+
+/// One markdown row: affine at ε = 1e-4 and parry's two methods on the
+/// cases of one pair kind.
+fn kind_summary(name: &str, cases: &[Case]) -> String {
+    let options = QueryOptions::default();
+    let mut ours = Row::new("affine".into(), Some(1e-4));
+    let mut nonlinear = Row::new("parry nonlinear".into(), None);
+    let mut sweep = Row::new("parry sweep".into(), None);
+    for case in cases {
+        let start = Instant::now();
+        let got = time_of_impact(
+            case.shape1.as_ref(),
+            &case.motion1,
+            case.shape2.as_ref(),
+            &case.motion2,
+            &options,
+        )
+        .expect("supported cases only");
+        let micros = start.elapsed().as_secs_f64() * 1e6;
+        ours.record(
+            case,
+            got.map(|t| t.fraction),
+            micros,
+            got.map(|t| t.stats.pair_evaluations),
+        );
+        for (row, method) in [
+            (
+                &mut nonlinear,
+                parry_nonlinear as fn(&Case) -> Result<Option<f64>, ()>,
+            ),
+            (&mut sweep, parry_sweep),
+        ] {
+            let start = Instant::now();
+            let got = method(case);
+            let micros = start.elapsed().as_secs_f64() * 1e6;
+            if let Ok(answer) = got {
+                row.record(case, answer, micros, None);
+            }
+        }
+    }
+    let (a, n) = (
+        quantile(&ours.times_us, 0.5),
+        quantile(&nonlinear.times_us, 0.5),
+    );
+    let or_na = |r: &Row, v: String| if r.cases == 0 { "n/a".to_string() } else { v };
+    format!(
+        "| {name} | {} | {a:.2} | {} | {} | {} | {} | {:.1e} | {} | {} | {} | {} |",
+        ours.cases,
+        or_na(&nonlinear, format!("{n:.2}")),
+        or_na(&nonlinear, format!("{:.2}", n / a)),
+        or_na(&sweep, format!("{:.2}", quantile(&sweep.times_us, 0.5))),
+        quantile(&ours.evaluations, 0.5),
+        ours.errors.iter().copied().fold(0.0, f64::max),
+        ours.false_negatives,
+        ours.false_positives,
+        or_na(&nonlinear, nonlinear.false_negatives.to_string()),
+        or_na(&sweep, sweep.false_negatives.to_string()),
+    )
 }
 
 /// Median time per query against median error, log–log, one line per

@@ -1,21 +1,22 @@
 #[path = "../benches/common/mod.rs"]
 mod common;
 use affine_ccd::query::{QueryOptions, time_of_impact};
+const REPS: usize = 300;
 fn main() {
+    let k: usize = std::env::args()
+        .nth(1)
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(2);
     let kinds = common::pair_kinds();
-    let cases = common::cases(&kinds[0], 300, 1000);
+    let cases = common::cases(&kinds[k], 200, 1000 + k as u64);
     let options = QueryOptions {
         epsilon: 1e-4,
         ..QueryOptions::default()
     };
-    let misses: Vec<_> = cases
-        .iter()
-        .filter(|c| c.truth.first_contact.is_none())
-        .collect();
     let t = std::time::Instant::now();
     let mut evals = 0;
-    for _ in 0..2000 {
-        for c in &misses {
+    for _ in 0..REPS {
+        for c in &cases {
             let r = time_of_impact(
                 c.shape1.as_ref(),
                 &c.motion1,
@@ -24,13 +25,14 @@ fn main() {
                 &options,
             )
             .unwrap();
-            if r.is_some() {
-                evals += 1;
+            if let Some(t) = r {
+                evals += t.stats.pair_evaluations;
             }
         }
     }
     println!(
-        "miss query {:?} {evals}",
-        t.elapsed() / (2000 * misses.len() as u32)
+        "{} query {:?} evals {evals}",
+        kinds[k].name,
+        t.elapsed() / (REPS as u32 * cases.len() as u32)
     );
 }

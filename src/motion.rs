@@ -335,7 +335,8 @@ impl Motion {
         let q1 = UnitQuaternion::new_normalize(end.rotation.into_inner());
         let theta = whole_turns(&(q1 * q0.inverse()).scaled_axis(), &(angvel_hint * dt));
         // No spin from the velocities: the exact rotation vector replaces it.
-        let mut motion = Motion::from_velocities(start, c0, Vector3::zeros(), Vector3::zeros(), dt)?;
+        let mut motion =
+            Motion::from_velocities(start, c0, Vector3::zeros(), Vector3::zeros(), dt)?;
         check_vector("rotation over the step", &theta)?;
         motion.rotation = theta;
         motion.spin = Spin::new(&theta, &motion.start_matrix, &motion.arm);

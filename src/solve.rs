@@ -46,6 +46,15 @@ pub trait GapSet<E: Enclosure> {
     /// `axes`, into `out[k]`. Other entries of `out` are left as they are.
     fn eval(&mut self, pair: usize, span: TimeSpan, axes: u64, out: &mut [E]);
 
+    /// True when the pair's axes are *exact*: every axis `≤ 0` at a time
+    /// means the shapes do touch then (two balls' distance, a box pair's 15
+    /// separating axes). Only then may the solver use the axes' upper
+    /// bounds to bracket a root; adaptive axes, chosen for a node's middle,
+    /// may fail to separate elsewhere on the node. The default: not exact.
+    fn is_exact(&self, _pair: usize) -> bool {
+        false
+    }
+
     /// A composite pair (a shape against a mesh, say) may stand for many
     /// sub-pairs. When `pair` is one and was not proved apart on `span`, push
     /// the numbers of the sub-pairs that may touch on `span` into `out` and
@@ -473,7 +482,7 @@ impl Solver {
                 earliest_pair = pair;
             }
             e_hi = e_hi.max(hi);
-            if let Some(c) = judged.certain {
+            if let Some(c) = judged.certain.filter(|_| gaps.is_exact(pair)) {
                 e_certain = e_certain.min(c.max(lo));
             }
             self.arena.push(Alive {

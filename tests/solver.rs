@@ -287,6 +287,9 @@ impl<E: Enclosure> GapSet<E> for PolySet {
     fn axis_count(&self, pair: usize) -> usize {
         self.pairs[pair].len()
     }
+    fn is_exact(&self, _pair: usize) -> bool {
+        true // the axes are the functions themselves
+    }
     fn eval(&mut self, pair: usize, span: TimeSpan, axes: u64, out: &mut [E]) {
         let t = E::time(span);
         for (k, c) in self.pairs[pair].iter().enumerate() {

@@ -94,6 +94,19 @@ impl PairGap {
         }
     }
 
+    /// Whether every axis `≤ 0` at a time means the shapes touch then
+    /// (see [`crate::solve::GapSet::is_exact`]): true for the families
+    /// whose axis sets are complete; false where an adaptive axis stands in.
+    pub fn is_exact(&self) -> bool {
+        matches!(
+            self,
+            PairGap::BallBall(_)
+                | PairGap::BallCuboid(_)
+                | PairGap::CuboidCuboid(_)
+                | PairGap::HalfSpace(_)
+        )
+    }
+
     /// Whether the family reads each side's rotation, `[a, b]`.
     pub fn reads_rotation(&self) -> [bool; 2] {
         match self {

@@ -491,6 +491,10 @@ impl<E: Enclosure> GapSet<E> for PairSet<'_, E> {
         }
     }
 
+    fn is_exact(&self, pair: usize) -> bool {
+        matches!(&self.pairs[pair].kind, PairKind::Leaf(gap, _) if gap.is_exact())
+    }
+
     fn begin_node(&mut self, _span: TimeSpan) {
         // A fixed frame's pose is the same on every node: keep it.
         for (pose, frame) in self.poses.iter_mut().zip(&self.frames) {
