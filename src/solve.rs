@@ -290,7 +290,13 @@ impl Solver {
                 }
             }
             let (start, end) = (node.start, node.end);
-            if let Some(sure) = node.certain {
+            // A likely touch confirmed at its single time (where adaptive
+            // axes are chosen for that very time) is as good as certain.
+            let confirmed = match (node.certain, node.likely) {
+                (None, Some(t)) if self.touching_at(gaps, t, &node, &mut stats) => Some(t),
+                (certain, _) => certain,
+            };
+            if let Some(sure) = confirmed {
                 // A root lies in [clipped.lo, sure]: report when that is
                 // narrow enough, else look there first (the bracket shrinks
                 // quadratically near a simple root; DESIGN.md's "split next
@@ -438,6 +444,9 @@ impl Solver {
         // Feasible part of the node in the local symbol e ∈ [−1, 1].
         let (mut e_lo, mut e_hi) = (f64::INFINITY, f64::NEG_INFINITY);
         let mut e_certain = f64::INFINITY;
+        // The same for pairs with adaptive axes: a likely touch, to be
+        // confirmed by a point evaluation before it is relied on.
+        let mut e_likely = f64::INFINITY;
         let mut earliest_pair = 0usize;
         // Pairs to look at: the frame's list (left intact for its sibling
         // node), then any sub-pairs that composites expand into.
@@ -482,8 +491,12 @@ impl Solver {
                 earliest_pair = pair;
             }
             e_hi = e_hi.max(hi);
-            if let Some(c) = judged.certain.filter(|_| gaps.is_exact(pair)) {
-                e_certain = e_certain.min(c.max(lo));
+            if let Some(c) = judged.certain {
+                if gaps.is_exact(pair) {
+                    e_certain = e_certain.min(c.max(lo));
+                } else {
+                    e_likely = e_likely.min(c.max(lo));
+                }
             }
             self.arena.push(Alive {
                 pair: item.pair,
@@ -508,12 +521,17 @@ impl Solver {
             span
         };
         // A time by which some pair surely touches, inside the clipped node.
+        let inside = |t: &f64| *t > clipped.lo && *t < clipped.hi;
+        let likely = (e_likely <= 1.0)
+            .then(|| to_time(e_likely, 1.0))
+            .filter(inside);
         let certain = (e_certain <= 1.0)
             .then(|| to_time(e_certain, 1.0))
             .filter(|&t| t > clipped.lo && t < clipped.hi);
         Some(Visited {
             span: clipped,
             certain,
+            likely,
             start: frame.end,
             end: self.arena.len(),
             earliest_pair,
@@ -526,6 +544,9 @@ struct Visited {
     span: TimeSpan,
     /// A time within `span` by which some pair surely touches.
     certain: Option<f64>,
+    /// A time within `span` by which a pair with adaptive axes likely
+    /// touches (not yet confirmed).
+    likely: Option<f64>,
     start: usize,
     end: usize,
     earliest_pair: usize,
