@@ -159,7 +159,6 @@ fn fall_on_half_space(ccd: Ccd, collider: ColliderBuilder) -> f32 {
 }
 
 #[test]
-#[ignore = "needs the real query: parry's nonlinear cast answers Unsupported against a HalfSpace"]
 fn a_ball_and_a_cylinder_falling_fast_stay_above_a_half_space() {
     for (name, collider, half_height) in [
         ("ball", ColliderBuilder::ball(0.25), 0.25),
