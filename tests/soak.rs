@@ -1,0 +1,153 @@
+//! Soak test of the rapier stage: fast spinning bodies of every shape kind,
+//! with restitution, in a closed box of thin walls. After every step no
+//! body may have left the box and no pose may be non-finite.
+//!
+//! The default run is short; the full one (300 bodies, 10,000 steps) is
+//! ignored: `cargo test --release --test soak -- --ignored --nocapture`.
+
+use affine_ccd::rapier::AffineCcd;
+use rapier3d::prelude::*;
+
+/// Half the inner size of the box, metres.
+const HALF: f32 = 5.0;
+/// Half the thickness of its walls, metres.
+const WALL: f32 = 0.05;
+
+/// SplitMix64, seeded.
+struct Rng(u64);
+
+impl Rng {
+    fn next(&mut self) -> f32 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        ((z ^ (z >> 31)) >> 40) as f32 / (1u64 << 24) as f32
+    }
+    fn range(&mut self, lo: f32, hi: f32) -> f32 {
+        lo + (hi - lo) * self.next()
+    }
+    fn vector(&mut self, r: f32) -> Vector {
+        Vector::new(self.range(-r, r), self.range(-r, r), self.range(-r, r))
+    }
+}
+
+/// A small shape of kind `k` (every kind the stage sweeps).
+fn shape(k: usize, rng: &mut Rng) -> SharedShape {
+    let s = rng.range(0.08, 0.25);
+    match k % 9 {
+        0 => SharedShape::ball(s),
+        1 => SharedShape::cuboid(s, 0.3 * s, 0.6 * s),
+        2 => SharedShape::capsule_y(s, 0.4 * s),
+        3 => SharedShape::cylinder(s, 0.5 * s),
+        4 => SharedShape::cone(s, 0.6 * s),
+        5 => SharedShape::round_cuboid(s, 0.2 * s, 0.5 * s, 0.02),
+        6 => {
+            let points: Vec<Vector> = (0..10).map(|_| rng.vector(s)).collect();
+            SharedShape::convex_hull(&points).unwrap_or_else(|| SharedShape::ball(s))
+        }
+        7 => SharedShape::compound(vec![
+            (
+                Pose::from_translation(Vector::new(-s, 0.0, 0.0)),
+                SharedShape::ball(0.5 * s),
+            ),
+            (
+                Pose::from_translation(Vector::new(s, 0.0, 0.0)),
+                SharedShape::cuboid(0.4 * s, 0.4 * s, 0.4 * s),
+            ),
+        ]),
+        _ => {
+            // A thin triangle-mesh plate.
+            let v = vec![
+                Vector::new(-s, 0.0, -s),
+                Vector::new(s, 0.0, -s),
+                Vector::new(s, 0.0, s),
+                Vector::new(-s, 0.0, s),
+            ];
+            SharedShape::trimesh(v, vec![[0, 1, 2], [0, 2, 3]]).expect("a valid plate")
+        }
+    }
+}
+
+fn closed_box(world: &mut PhysicsWorld) {
+    let walls = world.insert_body(RigidBodyBuilder::fixed());
+    let o = HALF + WALL;
+    let big = HALF + 2.0 * WALL;
+    for (center, half) in [
+        (Vector::new(o, 0.0, 0.0), Vector::new(WALL, big, big)),
+        (Vector::new(-o, 0.0, 0.0), Vector::new(WALL, big, big)),
+        (Vector::new(0.0, o, 0.0), Vector::new(big, WALL, big)),
+        (Vector::new(0.0, -o, 0.0), Vector::new(big, WALL, big)),
+        (Vector::new(0.0, 0.0, o), Vector::new(big, big, WALL)),
+        (Vector::new(0.0, 0.0, -o), Vector::new(big, big, WALL)),
+    ] {
+        world.insert_collider(
+            ColliderBuilder::cuboid(half.x, half.y, half.z)
+                .translation(center)
+                .restitution(0.9),
+            Some(walls),
+        );
+    }
+}
+
+/// Runs `bodies` bodies for `steps` steps; panics on the first body outside
+/// the box or non-finite pose, naming the step and the body.
+fn soak(bodies: usize, steps: usize, seed: u64) {
+    let mut rng = Rng(seed);
+    let mut world = PhysicsWorld::default();
+    let mut ccd = AffineCcd::default();
+    ccd.install(&mut world);
+    closed_box(&mut world);
+    let mut handles = Vec::new();
+    for i in 0..bodies {
+        let body = RigidBodyBuilder::dynamic()
+            .translation(rng.vector(HALF - 0.6))
+            .linvel(rng.vector(40.0))
+            .angvel(rng.vector(50.0))
+            .ccd_enabled(true);
+        let body = if i % 3 == 0 {
+            body.allow_fast_rotation(true)
+        } else {
+            body
+        };
+        let handle = world.insert_body(body);
+        world.insert_collider(
+            ColliderBuilder::new(shape(i, &mut rng)).restitution(0.8),
+            Some(handle),
+        );
+        handles.push(handle);
+    }
+    let (mut clamps, mut skipped) = (0, 0);
+    for step in 0..steps {
+        let report = ccd.step(&mut world);
+        clamps += report.clamps();
+        skipped += report.skipped.len();
+        for (i, h) in handles.iter().enumerate() {
+            let body = &world.bodies[*h];
+            let p = body.translation();
+            assert!(
+                p.is_finite(),
+                "step {step}: body {i} has a non-finite pose {p:?}"
+            );
+            // The centre of mass may touch the wall's inner face, not pass it.
+            let limit = HALF + WALL;
+            assert!(
+                p.x.abs() < limit && p.y.abs() < limit && p.z.abs() < limit,
+                "step {step}: body {i} ({:?}) left the box: {p:?}",
+                world.colliders[body.colliders()[0]].shape().shape_type()
+            );
+        }
+    }
+    println!("{bodies} bodies, {steps} steps: {clamps} clamps, {skipped} skipped body-steps");
+}
+
+#[test]
+fn a_short_soak_keeps_every_body_in_the_box() {
+    soak(60, 300, 1);
+}
+
+#[test]
+#[ignore = "takes minutes: run by hand and report"]
+fn a_long_soak_keeps_every_body_in_the_box() {
+    soak(300, 10_000, 2);
+}
