@@ -4,7 +4,7 @@
 //! answer must lie in the searched range.
 //!
 //! The default run is short; `fuzz_query_long` (ignored) runs many more
-//! cases: `cargo test --release --test fuzz_query -- --ignored`.
+//! cases: `FUZZ_CASES=2000000 cargo test --release --test fuzz_query -- --ignored`.
 
 use affine_ccd::query::{QueryOptions, time_of_impact};
 use affine_ccd::{Arithmetic, Motion, RootStatus, TimeSpan};
@@ -144,10 +144,18 @@ proptest! {
     }
 }
 
+/// Cases of the long run: `FUZZ_CASES` from the environment, else 2,000,000.
+fn long_cases() -> u32 {
+    std::env::var("FUZZ_CASES")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(2_000_000)
+}
+
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(200_000))]
+    #![proptest_config(ProptestConfig::with_cases(long_cases()))]
     #[test]
-    #[ignore]
+    #[ignore = "minutes: run by hand and report"]
     fn fuzz_query_long(
         kinds in (any::<u8>(), any::<u8>()),
         shapes in arrays::<18>(),

@@ -298,3 +298,115 @@ fn bad_options_and_sizes_are_typed_errors_naming_the_value() {
     };
     assert!(time_of_impact(&Ball::new(1.0), &m, &Ball::new(1.0), &m, &options).is_ok());
 }
+
+use rapier3d::parry::math::Vector;
+use rapier3d::parry::shape::{Capsule, Cuboid, Shape, TriMesh, Triangle};
+
+/// Earliest sampled contact of two shapes by parry's distance (f32 poses).
+fn sampled_contact(s1: &dyn Shape, m1: &Motion, s2: &dyn Shape, m2: &Motion) -> Option<f64> {
+    affine_ccd::truth::sample(s1, m1, s2, m2, 0.0, 4096)
+        .expect("parry answers")
+        .first_contact
+}
+
+#[test]
+fn parallel_faces_and_edges_of_aligned_boxes() {
+    // Aligned boxes: every cross-product axis vanishes (|n| = 0). Face to
+    // face, and edge to edge (one box turned 90° about z, still parallel).
+    let a = Cuboid::new(Vector::new(0.5, 0.5, 0.5));
+    let b = Cuboid::new(Vector::new(0.5, 0.2, 0.5));
+    for (turn, offset_y) in [(0.0, 0.0), (std::f64::consts::FRAC_PI_2, 0.0), (0.0, 0.69)] {
+        let start = Isometry3::from_parts(
+            Translation3::new(-2.0, offset_y, 0.0),
+            UnitQuaternion::from_euler_angles(0.0, 0.0, turn),
+        );
+        let m1 = Motion::from_velocities(
+            start,
+            Point3::new(-2.0, offset_y, 0.0),
+            Vector3::new(120.0, 0.0, 0.0),
+            Vector3::zeros(),
+            DT,
+        )
+        .unwrap();
+        let m2 = Motion::fixed(Isometry3::identity()).unwrap();
+        let truth = sampled_contact(&a, &m1, &b, &m2);
+        for kind in Arithmetic::ALL {
+            let options = QueryOptions {
+                arithmetic: kind,
+                ..QueryOptions::default()
+            };
+            let got = time_of_impact(&a, &m1, &b, &m2, &options).unwrap();
+            match (truth, got) {
+                (Some(t), Some(toi)) => {
+                    assert!(
+                        toi.fraction <= t + 1e-6,
+                        "turn {turn} {kind:?}: {} after {t}",
+                        toi.fraction
+                    );
+                    assert!(
+                        t - toi.fraction <= 1e-3,
+                        "turn {turn} {kind:?}: {} long before {t}",
+                        toi.fraction
+                    );
+                }
+                (Some(t), None) => panic!("turn {turn} {kind:?}: missed the contact at {t}"),
+                (None, _) => panic!("turn {turn}: the set-up should collide"),
+            }
+        }
+    }
+}
+
+#[test]
+fn degenerate_shapes_answer_without_panic() {
+    let fixed = Motion::fixed(Isometry3::identity()).unwrap();
+    let flying = Motion::from_velocities(
+        Isometry3::translation(-2.0, 0.0, 0.0),
+        Point3::new(-2.0, 0.0, 0.0),
+        Vector3::new(150.0, 0.0, 0.0),
+        Vector3::new(0.0, 0.0, 30.0),
+        DT,
+    )
+    .unwrap();
+    let flat_box = Cuboid::new(Vector::new(0.0, 0.5, 0.5)); // zero half-extent
+    let point_capsule = Capsule::new(Vector::ZERO, Vector::ZERO, 0.2); // zero length
+    let sliver = Triangle::new(
+        Vector::new(0.0, -1.0, 0.0),
+        Vector::new(0.0, 0.0, 0.0),
+        Vector::new(0.0, 1.0, 0.0),
+    ); // zero area
+    let wall = Cuboid::new(Vector::new(0.05, 1.0, 1.0));
+    let shapes: [(&str, &dyn Shape); 3] = [
+        ("flat box", &flat_box),
+        ("point capsule", &point_capsule),
+        ("sliver triangle", &sliver),
+    ];
+    for (name, shape) in shapes {
+        let got = time_of_impact(shape, &flying, &wall, &fixed, &QueryOptions::default());
+        match got {
+            // Each sweeps through the wall's plane: a sound answer must hit.
+            Ok(Some(toi)) => assert!(toi.fraction < 1.0, "{name}: {toi:?}"),
+            Ok(None) => panic!("{name}: passed through the wall unreported"),
+            Err(e) => println!("{name}: typed error {e}"),
+        }
+    }
+    // An empty mesh cannot even be built by parry; a mesh of one zero-area
+    // triangle can, and must not panic.
+    let empty = TriMesh::new(vec![Vector::ZERO; 3], vec![[0, 1, 2]]);
+    if let Ok(mesh) = empty {
+        let got = time_of_impact(
+            &Ball::new(0.1),
+            &flying,
+            &mesh,
+            &fixed,
+            &QueryOptions::default(),
+        );
+        println!("degenerate mesh: {got:?}");
+    }
+    // Collinear hull points: parry refuses the hull, so there is nothing to ask.
+    let collinear = [
+        Vector::new(0.0, 0.0, 0.0),
+        Vector::new(1.0, 0.0, 0.0),
+        Vector::new(2.0, 0.0, 0.0),
+    ];
+    assert!(rapier3d::parry::shape::ConvexPolyhedron::from_convex_hull(&collinear).is_none());
+}
