@@ -615,6 +615,7 @@ fn run_all(cases: usize, hard: usize, seed: u64) {
     let rows: Mutex<Vec<(usize, Row)>> = Mutex::new(Vec::new());
     let next = Mutex::new(0usize);
     let threads = std::thread::available_parallelism().map_or(2, |n| n.get());
+    let only = std::env::var("GAP_CONVEX_CASE").ok();
     std::thread::scope(|scope| {
         for _ in 0..threads {
             scope.spawn(|| {
@@ -637,6 +638,9 @@ fn run_all(cases: usize, hard: usize, seed: u64) {
                             _ => Hard::StartTouching,
                         });
                         let case = make_case(&mut rng, k1, k2, kind);
+                        if only.as_ref().is_some_and(|o| *o != format!("{label}:{i}")) {
+                            continue; // debugging one case: generate, skip
+                        }
                         run_case(&case, &mut row, &label, i);
                     }
                     rows.lock().unwrap().push((p, row));
