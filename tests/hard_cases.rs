@@ -410,3 +410,22 @@ fn degenerate_shapes_answer_without_panic() {
     ];
     assert!(rapier3d::parry::shape::ConvexPolyhedron::from_convex_hull(&collinear).is_none());
 }
+
+#[test]
+fn witness_normal_against_a_rotated_half_space_points_into_it() {
+    // A ball falling onto a floor tilted by 0.3 rad, the floor second.
+    let floor = rapier3d::parry::shape::HalfSpace::new(Vector::new(0.0, 1.0, 0.0));
+    let tilt = UnitQuaternion::from_euler_angles(0.3, 0.0, 0.0);
+    let m2 = Motion::fixed(Isometry3::from_parts(Translation3::identity(), tilt)).unwrap();
+    let m1 = linear(Vector3::new(0.0, 2.0, 0.0), Vector3::new(0.0, -200.0, 0.0));
+    let toi = time_of_impact(&Ball::new(0.5), &m1, &floor, &m2, &QueryOptions::default())
+        .unwrap()
+        .expect("the ball reaches the floor");
+    let up = tilt * Vector3::y();
+    // The normal from the ball towards the floor is minus the floor's normal.
+    assert!(
+        (toi.normal1 + up).norm() < 1e-3,
+        "normal {:?}, floor normal {up:?}",
+        toi.normal1
+    );
+}

@@ -612,14 +612,29 @@ fn describe(
     let dt = motion1.dt().max(motion2.dt());
     let (iso1, iso2) = (motion1.pose_at(fraction), motion2.pose_at(fraction));
     let (pose1, pose2) = (pose_from_iso(&iso1), pose_from_iso(&iso2));
-    let contact = rapier3d::parry::query::contact(&pose1, shape1, &pose2, shape2, f32::MAX)
-        .ok()
-        .flatten();
+    // parry 0.31.1's support-map/half-space contact is wrong when the
+    // half-space comes second and is rotated (it uses pos12 where it needs
+    // its inverse): ask with the half-space first and swap the answer back.
+    let half_space_second = matches!(
+        shape2.shape_type(),
+        rapier3d::parry::shape::ShapeType::HalfSpace
+    );
+    let contact = if half_space_second {
+        rapier3d::parry::query::contact(&pose2, shape2, &pose1, shape1, f32::MAX)
+            .ok()
+            .flatten()
+            .map(|c| (c.point2, c.point1, c.normal2))
+    } else {
+        rapier3d::parry::query::contact(&pose1, shape1, &pose2, shape2, f32::MAX)
+            .ok()
+            .flatten()
+            .map(|c| (c.point1, c.point2, c.normal1))
+    };
     let (witness1, witness2, normal1) = match contact {
-        Some(c) => (
-            Point3::from(vec_from_glam(c.point1)),
-            Point3::from(vec_from_glam(c.point2)),
-            vec_from_glam(c.normal1),
+        Some((p1, p2, n1)) => (
+            Point3::from(vec_from_glam(p1)),
+            Point3::from(vec_from_glam(p2)),
+            vec_from_glam(n1),
         ),
         None => {
             let (o1, o2) = (iso1.translation.vector, iso2.translation.vector);
