@@ -471,7 +471,15 @@ impl Solver {
             let Some(judged) = judge_pair(&out, item.axes) else {
                 continue;
             };
-            let (axes, lo, hi) = (judged.axes, judged.lo, judged.hi);
+            // Dominated axes are dropped only from exact axis sets: an
+            // adaptive axis is chosen anew on every node, so being dominated
+            // on this one says nothing about its sub-nodes.
+            let axes = if gaps.is_exact(pair) {
+                judged.axes
+            } else {
+                item.axes
+            };
+            let (lo, hi) = (judged.lo, judged.hi);
             self.children.clear();
             if gaps.expand(pair, span, &mut self.children) {
                 for &child in &self.children {
