@@ -46,6 +46,17 @@ pub trait GapSet<E: Enclosure> {
     /// `axes`, into `out[k]`. Other entries of `out` are left as they are.
     fn eval(&mut self, pair: usize, span: TimeSpan, axes: u64, out: &mut [E]);
 
+    /// True when pair `pair`'s axes are exact for touching: every axis
+    /// `≤ 0` at a time proves the pair within its skin then. Only then may
+    /// the search bracket a root with the axes' upper bounds. Families with
+    /// adaptive axes (a direction chosen at the node's middle) are not: all
+    /// their axes can be `≤ 0` while the shapes are apart elsewhere. The
+    /// default: exact (a set whose pairs touch by definition where every
+    /// axis is `≤ 0`).
+    fn exact(&self, _pair: usize) -> bool {
+        true
+    }
+
     /// A composite pair (a shape against a mesh, say) may stand for many
     /// sub-pairs. When `pair` is one and was not proved apart on `span`, push
     /// the numbers of the sub-pairs that may touch on `span` into `out` and
@@ -473,7 +484,7 @@ impl Solver {
                 earliest_pair = pair;
             }
             e_hi = e_hi.max(hi);
-            if let Some(c) = judged.certain {
+            if let Some(c) = judged.certain.filter(|_| gaps.exact(pair)) {
                 e_certain = e_certain.min(c.max(lo));
             }
             self.arena.push(Alive {

@@ -94,6 +94,23 @@ impl PairGap {
         }
     }
 
+    /// Whether every axis `≤ 0` proves the shapes within the skin (the
+    /// solver may then bracket roots with the axes' upper bounds). False
+    /// for the families with an adaptive direction or with axes complete
+    /// only for touching without a skin.
+    pub fn exact(&self) -> bool {
+        match self {
+            PairGap::BallBall(_)
+            | PairGap::BallCuboid(_)
+            | PairGap::CuboidCuboid(_)
+            | PairGap::HalfSpace(_) => true,
+            PairGap::BallTriangle(_)
+            | PairGap::BallSegment(_)
+            | PairGap::TriangleTriangle(_)
+            | PairGap::SupportMap(_) => false,
+        }
+    }
+
     /// Whether the family reads each side's rotation, `[a, b]`.
     pub fn reads_rotation(&self) -> [bool; 2] {
         match self {

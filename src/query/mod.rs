@@ -491,6 +491,13 @@ impl<E: Enclosure> GapSet<E> for PairSet<'_, E> {
         }
     }
 
+    fn exact(&self, pair: usize) -> bool {
+        match &self.pairs[pair].kind {
+            PairKind::Leaf(gap, _) => gap.exact(),
+            PairKind::Composite(_) | PairKind::Broken => false,
+        }
+    }
+
     fn begin_node(&mut self, _span: TimeSpan) {
         // A fixed frame's pose is the same on every node: keep it.
         for (pose, frame) in self.poses.iter_mut().zip(&self.frames) {
