@@ -11,18 +11,17 @@ use crate::error::CcdError;
 use crate::motion::{Motion, Trajectory};
 use rapier3d::prelude::{ColliderSet, RigidBodySet};
 
-/// Moves the body to its pose at `fraction` of its motion over the step.
-/// `set_position` marks it modified, so rapier resyncs its colliders and
-/// broad-phase boxes at the next step's start; call
-/// [`sync_colliders`] once after all clamps for queries in between.
-pub(crate) fn clamp(
-    bodies: &mut RigidBodySet,
+/// The body's motion cut short at `fraction`: the same path, ending at its
+/// pose at `fraction` (the angular velocity scaled so the whole turns stay
+/// the ones of that part of the path).
+pub(crate) fn truncate(
+    bodies: &RigidBodySet,
     body: &Moved,
     fraction: f64,
     dt: f64,
-) -> Result<(), CcdError> {
+) -> Result<Moved, CcdError> {
     let Some(rb) = bodies.get(body.handle) else {
-        return Ok(());
+        return Ok(*body);
     };
     let motion = Motion::from_poses(
         iso_from_pose(&body.start),
@@ -38,10 +37,21 @@ pub(crate) fn clamp(
             value: f64::NAN,
         });
     }
+    Ok(Moved {
+        end: pose,
+        angvel: body.angvel * fraction as f32,
+        ..*body
+    })
+}
+
+/// Moves the body to the end of its (cut) motion. `set_position` marks it
+/// modified, so rapier resyncs its colliders and broad-phase boxes at the
+/// next step's start; call [`sync_colliders`] once after all clamps for
+/// queries in between.
+pub(crate) fn clamp(bodies: &mut RigidBodySet, body: &Moved) {
     if let Some(rb) = bodies.get_mut(body.handle) {
-        rb.set_position(pose, true);
+        rb.set_position(body.end, true);
     }
-    Ok(())
 }
 
 /// Brings the colliders of clamped bodies to their new poses now, so that

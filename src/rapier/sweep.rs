@@ -13,8 +13,9 @@ use crate::motion::{Motion, Trajectory};
 use crate::solve::RootStatus;
 use rapier3d::parry::query::{DefaultQueryDispatcher, QueryDispatcher};
 use rapier3d::parry::shape::Shape;
+use rapier3d::prelude::RigidBodyHandle;
 use rapier3d::prelude::{BroadPhaseBvh, ColliderHandle};
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 
 /// The earliest solid impact of one fast body.
 #[derive(Clone, Copy, Debug)]
@@ -31,6 +32,19 @@ pub(crate) struct SensorPair {
     pub collider2: ColliderHandle,
     pub motion1: Motion,
     pub motion2: Motion,
+}
+
+/// Which of a body's candidates a sweep looks at.
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum Targets<'a> {
+    /// Everything it may collide with (the first sweep of a fast body).
+    All,
+    /// Only colliders of bodies that moved during the step (a body whose
+    /// own motion was cut short: against fixed targets it only covers part
+    /// of the path already cleared, against moving ones its timing changed).
+    Moving,
+    /// Only colliders of these bodies (whose motion was cut short).
+    Only(&'a HashSet<RigidBodyHandle>),
 }
 
 /// Reused buffers; `motions` caches target motions for one step (clear it
@@ -139,6 +153,7 @@ pub(crate) fn sweep_body(
     dispatcher: &dyn QueryDispatcher,
     motions: &Motions,
     body: &Moved,
+    targets: Targets,
     opts: &QueryOptions,
     ws: &mut Workspace,
     report: &mut CcdReport,
@@ -188,6 +203,15 @@ pub(crate) fn sweep_body(
         let mut handles = Vec::new();
         for c in &ws.candidates {
             let co2 = &scene.colliders[c.handle];
+            let parent = co2.parent();
+            let wanted = match targets {
+                Targets::All => true,
+                Targets::Moving => parent.is_some_and(|b| motions.body(b).is_some()),
+                Targets::Only(set) => parent.is_some_and(|b| set.contains(&b)),
+            };
+            if !wanted {
+                continue;
+            }
             let motion2 = match ws.motions.get(&c.handle) {
                 Some(m) => *m,
                 None => motions.collider(co2, scene.bodies)?,
