@@ -68,7 +68,17 @@ fn gap_at(
 ) -> Option<(f64, Option<rapier3d::parry::query::Contact>)> {
     let p1 = pose_from_iso(&m1.pose_at(tau));
     let p2 = pose_from_iso(&m2.pose_at(tau));
-    match rapier3d::parry::query::contact(&p1, s1, &p2, s2, reach as f32) {
+    // parry 0.31.1 answers a convex shape against a half-space wrongly
+    // (the depth grows with the distance from the plane's origin); the
+    // half-space first is right.
+    let flip = s2.as_halfspace().is_some() && s1.as_halfspace().is_none();
+    let found = if flip {
+        rapier3d::parry::query::contact(&p2, s2, &p1, s1, reach as f32)
+            .map(|c| c.map(|c| c.flipped()))
+    } else {
+        rapier3d::parry::query::contact(&p1, s1, &p2, s2, reach as f32)
+    };
+    match found {
         Ok(Some(c)) => Some((c.dist as f64, Some(c))),
         Ok(None) => Some((reach, None)),
         Err(_) => None,
