@@ -276,7 +276,7 @@ pub(crate) fn sweep_body(
             continue;
         };
         let motion1 = motions.collider(co1, scene.bodies)?;
-        let swept = swept_aabb(co1.shape(), &motion1, co1.position());
+        let swept = swept_aabb(co1.shape(), &motion1);
         let mut failure = None;
         let cache = &mut ws.motions;
         gather(
@@ -295,7 +295,7 @@ pub(crate) fn sweep_body(
             {
                 Ok(m) => {
                     cache.insert(h2, m);
-                    Some(swept_aabb(co2.shape(), &m, co2.position()))
+                    Some(swept_aabb(co2.shape(), &m))
                 }
                 Err(e) => {
                     failure = Some(e);
