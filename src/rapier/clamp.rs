@@ -11,22 +11,27 @@ use crate::error::CcdError;
 use crate::motion::{Motion, Trajectory};
 use rapier3d::prelude::{ColliderSet, RigidBodySet};
 
-/// The body's motion cut short at `fraction`: the same path, ending at its
-/// pose at `fraction` (the angular velocity scaled so the whole turns stay
-/// the ones of that part of the path).
+/// The body's motion cut short at `fraction`: it ends at its pose at
+/// `fraction`, and runs between its two poses as every motion between two
+/// poses does in the stage (whole turns from the angular velocity only when
+/// it matches, `select::turn_hint`). `true` with it when that is not the
+/// same path as the part of the old motion (a fast spinner cut where its
+/// orientation matches a free spin again): the cut motion then needs a
+/// full sweep.
 pub(crate) fn truncate(
     bodies: &RigidBodySet,
     body: &Moved,
     fraction: f64,
     dt: f64,
-) -> Result<Moved, CcdError> {
+) -> Result<(Moved, bool), CcdError> {
     let Some(rb) = bodies.get(body.handle) else {
-        return Ok(*body);
+        return Ok((*body, false));
     };
+    let com = point_from_glam(rb.local_center_of_mass());
     let motion = Motion::from_poses(
         iso_from_pose(&body.start),
         iso_from_pose(&body.end),
-        point_from_glam(rb.local_center_of_mass()),
+        com,
         dt,
         vec_from_glam(body.angvel),
     )?;
@@ -37,11 +42,23 @@ pub(crate) fn truncate(
             value: f64::NAN,
         });
     }
-    Ok(Moved {
-        end: pose,
-        angvel: body.angvel * fraction as f32,
-        ..*body
-    })
+    let hint = super::select::turn_hint(rb, &body.start, &pose, dt);
+    let cut = Motion::from_poses(
+        iso_from_pose(&body.start),
+        iso_from_pose(&pose),
+        com,
+        dt,
+        vec_from_glam(hint),
+    )?;
+    let rerouted = (cut.rotation() - motion.rotation() * fraction).norm() > 1.0e-3;
+    Ok((
+        Moved {
+            end: pose,
+            angvel: hint,
+            ..*body
+        },
+        rerouted,
+    ))
 }
 
 /// Moves the body to the end of its (cut) motion. `set_position` marks it

@@ -342,6 +342,8 @@ fn sweep_all(
     let mut dirty: Vec<usize> = (0..moved.len()).filter(|&i| moved[i].fast).collect();
     let mut changed_set: HashSet<RigidBodyHandle> = HashSet::new();
     let mut changed: Vec<usize> = Vec::new();
+    // Clamped bodies whose cut motion is not part of the old path.
+    let mut rerouted: HashSet<RigidBodyHandle> = HashSet::new();
     let resweep = QueryOptions {
         skin: 0.5 * opts.skin,
         ..*opts
@@ -357,6 +359,8 @@ fn sweep_all(
             let body = &current[i];
             let (targets, round_opts) = if round == 0 {
                 (sweep::Targets::All, opts)
+            } else if rerouted.contains(&body.handle) {
+                (sweep::Targets::All, &resweep)
             } else if changed_set.contains(&body.handle) {
                 (sweep::Targets::Moving, &resweep)
             } else {
@@ -390,9 +394,13 @@ fn sweep_all(
         // Cut the motions after all sweeps of the round.
         changed.clear();
         changed_set.clear();
+        rerouted.clear();
         for (i, hit) in found {
             match clamp::truncate(scene.bodies, &current[i], hit.toi.fraction, dt) {
-                Ok(cut) => {
+                Ok((cut, new_path)) => {
+                    if new_path {
+                        rerouted.insert(cut.handle);
+                    }
                     current[i] = cut;
                     scale[i] *= hit.toi.fraction;
                     last[i] = Some(hit);

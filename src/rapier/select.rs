@@ -145,7 +145,7 @@ pub(crate) fn moved(
             handle: start.handle,
             start: start.pose,
             end,
-            angvel: turn_hint(&start.pose, &end, rb.angvel(), dt),
+            angvel: turn_hint(rb, &start.pose, &end, dt),
             fast,
             travel,
         });
@@ -162,11 +162,20 @@ const SPIN_MATCH: f64 = std::f64::consts::FRAC_PI_4;
 /// (the shortest rotation). A contact that changed the spin during the step
 /// (a bounce) leaves an angular velocity that says nothing of the turns
 /// made, and adding a whole turn the body never made would sweep a path
-/// it never took (and miss the one it did).
-fn turn_hint(start: &Pose, end: &Pose, angvel: Vector, dt: f64) -> Vector {
+/// it never took (and miss the one it did). Likewise when the centre of
+/// mass did not move as a free flight at the body's velocity (a clamp that
+/// happens to leave the orientation one free spin on). The same convention
+/// as the scene oracle's (`scenes::motion::BodyMotion::between_free`).
+pub(crate) fn turn_hint(rb: &RigidBody, start: &Pose, end: &Pose, dt: f64) -> Vector {
+    let angvel = rb.angvel();
     let spin = angvel.length() as f64 * dt;
     if !(spin > PI) {
         return angvel;
+    }
+    let com = rb.local_center_of_mass();
+    let delta = *end * com - *start * com;
+    if !crate::scenes::motion::free_flight(delta, rb.linvel(), dt as f32) {
+        return Vector::ZERO;
     }
     let dq = end.rotation * start.rotation.inverse();
     let (axis, angle) = dq.to_axis_angle();

@@ -159,10 +159,11 @@ fn track<'a>(
         .get(&body_handle)
         .map(|s| s.pose)
         .unwrap_or(*body.position());
-    let motion = BodyMotion::between(
+    let motion = BodyMotion::between_free(
         &start,
         body.position(),
         local_com,
+        Some(body.linvel()),
         body.angvel(),
         world.integration_parameters.dt,
     );
