@@ -203,7 +203,7 @@ impl AffineCcd {
                 &mut self.report,
                 &mut self.moved,
             );
-            if self.moved.iter().any(|m| m.fast || m.pusher) {
+            if self.moved.iter().any(|m| m.fast) {
                 let opts = self.options(&params);
                 let scene = Scene {
                     bodies,
@@ -245,9 +245,6 @@ impl AffineCcd {
         for (i, hit) in &plan.hits {
             let body = &plan.moved[*i];
             clamp::clamp(bodies, body);
-            if let (Some(v), Some(rb)) = (plan.velocity[*i], bodies.get_mut(body.handle)) {
-                rb.set_linvel(v, true);
-            }
             let fraction = plan.scale[*i];
             stops.insert(body.handle, fraction);
             self.report.hits.push(CcdHitEvent {
@@ -311,8 +308,6 @@ struct Plan {
     moved: Vec<Moved>,
     /// Per moved body, the share of its motion it keeps (1: not clamped).
     scale: Vec<f64>,
-    /// Per moved body, the velocity a pusher gave it.
-    velocity: Vec<Option<rapier3d::prelude::Vector>>,
     /// Index into `moved` of each clamped body, and its last impact.
     hits: Vec<(usize, sweep::BodyHit)>,
     sensors: Vec<SensorPair>,
@@ -321,35 +316,11 @@ struct Plan {
 /// Rounds of re-sweeping after clamps (the first sweep included).
 const MAX_ROUNDS: usize = 8;
 
-/// What one body is swept against in a round.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Against {
-    /// Everything (a fast body's first sweep, a rerouted body).
-    All,
-    /// The moving bodies (a clamped body: its timing changed).
-    Moving,
-    /// The bodies changed in the last round.
-    Changed,
-    /// The fast kinematic bodies (a dynamic body near one).
-    Pushers,
-    /// Everything but dynamic bodies and pushers (a carried body).
-    Blockers,
-}
-
 /// Sweeps the fast bodies; then, while some body was clamped, sweeps again
 /// what the clamps changed: a clamped body against the moving bodies (its
 /// timing changed), and every dynamic body near a clamped one against it
 /// (it was solved against the uncut motion). Re-sweeps use half the skin,
 /// so a pair left a skin apart by an earlier clamp does not clamp again.
-///
-/// Fast kinematic bodies ("pushers") are swept against too: rapier never
-/// sweeps them, so a fast paddle passes through resting boxes. A dynamic
-/// body (awake or not, moving or not) that a pusher would pass is
-/// *carried*: from its time of impact on it moves rigidly with the pusher,
-/// ends a skin ahead of it and gets the pusher's velocity at its centre of
-/// mass (an inelastic push; the next step's contacts go on from there).
-/// What a carried body meets on the way is carried in turn; anything else
-/// stops it (it is then squeezed, rapier's contacts' business).
 #[allow(clippy::too_many_arguments)]
 fn sweep_all(
     scene: &Scene,
@@ -365,71 +336,14 @@ fn sweep_all(
     use std::collections::HashSet;
     let dispatcher = narrow_phase.query_dispatcher();
     let mut current = moved.to_vec();
-    let mut dirty: Vec<(usize, Against)> = (0..moved.len())
-        .filter(|&i| moved[i].fast)
-        .map(|i| (i, Against::All))
-        .collect();
-    // Dynamic bodies near a pusher, resting ones included.
-    let mut pushing: HashSet<RigidBodyHandle> = moved
-        .iter()
-        .filter(|m| m.pusher)
-        .map(|m| m.handle)
-        .collect();
-    if !pushing.is_empty() {
-        let query = broad_phase.as_query_pipeline(
-            dispatcher,
-            scene.bodies,
-            scene.colliders,
-            rapier3d::prelude::QueryFilter::default(),
-        );
-        let boxes: Vec<_> = moved
-            .iter()
-            .filter(|m| m.pusher)
-            .filter_map(|m| body_box(scene, m))
-            .collect();
-        let mut near = HashSet::new();
-        for b in boxes {
-            for (_, co) in query.intersect_aabb_conservative(b) {
-                if let Some(h) = co.parent() {
-                    near.insert(h);
-                }
-            }
-        }
-        for h in near {
-            let Some(rb) = scene.bodies.get(h) else {
-                continue;
-            };
-            if !rb.is_dynamic() || !rb.is_enabled() || scene.config.opted_out(rb.user_data) {
-                continue;
-            }
-            match current.iter().position(|m| m.handle == h) {
-                Some(i) if current[i].fast => {}
-                Some(i) => dirty.push((i, Against::Pushers)),
-                None => {
-                    current.push(Moved {
-                        handle: h,
-                        start: *rb.position(),
-                        end: *rb.position(),
-                        angvel: rapier3d::prelude::Vector::ZERO,
-                        fast: false,
-                        pusher: false,
-                        travel: 0.0,
-                    });
-                    dirty.push((current.len() - 1, Against::Pushers));
-                }
-            }
-        }
-    }
-    let n = current.len();
-    let mut scale = vec![1.0; n];
-    let mut velocity: Vec<Option<rapier3d::prelude::Vector>> = vec![None; n];
-    let mut last: Vec<Option<sweep::BodyHit>> = vec![None; n];
+    let mut scale = vec![1.0; moved.len()];
+    let mut last: Vec<Option<sweep::BodyHit>> = vec![None; moved.len()];
     let mut sensors = Vec::new();
+    let mut dirty: Vec<usize> = (0..moved.len()).filter(|&i| moved[i].fast).collect();
     let mut changed_set: HashSet<RigidBodyHandle> = HashSet::new();
     let mut changed: Vec<usize> = Vec::new();
     // Clamped bodies whose cut motion is not part of the old path.
     let mut rerouted: HashSet<RigidBodyHandle> = HashSet::new();
-    let mut carried: HashSet<RigidBodyHandle> = HashSet::new();
     let resweep = QueryOptions {
         skin: 0.5 * opts.skin,
         ..*opts
@@ -441,16 +355,17 @@ fn sweep_all(
         let motions = Motions::new(&current, dt);
         ws.motions.clear();
         let mut found = Vec::new();
-        for &(i, against) in &dirty {
+        for &i in &dirty {
             let body = &current[i];
-            let targets = match against {
-                Against::All => sweep::Targets::All,
-                Against::Moving => sweep::Targets::Moving,
-                Against::Changed => sweep::Targets::Only(&changed_set),
-                Against::Pushers => sweep::Targets::Only(&pushing),
-                Against::Blockers => sweep::Targets::Blockers(&pushing),
+            let (targets, round_opts) = if round == 0 {
+                (sweep::Targets::All, opts)
+            } else if rerouted.contains(&body.handle) {
+                (sweep::Targets::All, &resweep)
+            } else if changed_set.contains(&body.handle) {
+                (sweep::Targets::Moving, &resweep)
+            } else {
+                (sweep::Targets::Only(&changed_set), &resweep)
             };
-            let round_opts = if round == 0 { opts } else { &resweep };
             report.bodies_swept += 1;
             let mut body_sensors = Vec::new();
             match sweep::sweep_body(
@@ -476,75 +391,38 @@ fn sweep_all(
                 Err(e) => report.skip(body.handle, SkipReason::Query(e.to_string())),
             }
         }
-        // Cut (or carry) the motions after all sweeps of the round.
+        // Cut the motions after all sweeps of the round.
         changed.clear();
         changed_set.clear();
         rerouted.clear();
-        let before = current.clone();
         for (i, hit) in found {
-            let by = scene.colliders[hit.collider2]
-                .parent()
-                .filter(|h| pushing.contains(h))
-                .and_then(|h| before.iter().position(|m| m.handle == h));
-            let f = hit.toi.fraction;
-            let handle = current[i].handle;
-            match by {
-                Some(p) => match clamp::carry(scene.bodies, &before[i], &before[p], f, dt) {
-                    Ok((cut, v)) => {
-                        current[i] = cut;
-                        velocity[i] = Some(velocity[p].unwrap_or(v));
-                        carried.insert(handle);
-                        rerouted.insert(handle);
+            match clamp::truncate(scene.bodies, &current[i], hit.toi.fraction, dt) {
+                Ok((cut, new_path)) => {
+                    if new_path {
+                        rerouted.insert(cut.handle);
                     }
-                    Err(e) => {
-                        report.skip(handle, SkipReason::Query(e.to_string()));
-                        continue;
-                    }
-                },
-                None => match clamp::truncate(scene.bodies, &before[i], f, dt) {
-                    Ok((cut, new_path)) => {
-                        if new_path {
-                            rerouted.insert(handle);
-                        }
-                        current[i] = cut;
-                        scale[i] *= f;
-                    }
-                    Err(e) => {
-                        report.skip(handle, SkipReason::Query(e.to_string()));
-                        continue;
-                    }
-                },
+                    current[i] = cut;
+                    scale[i] *= hit.toi.fraction;
+                    last[i] = Some(hit);
+                    changed.push(i);
+                    changed_set.insert(cut.handle);
+                }
+                Err(e) => report.skip(current[i].handle, SkipReason::Query(e.to_string())),
             }
-            last[i] = Some(hit);
-            changed.push(i);
-            changed_set.insert(handle);
         }
-        pushing.extend(carried.iter().copied());
-        // Next round: the changed bodies, and the dynamic bodies whose
-        // swept box meets a changed body's.
+        // Next round: the clamped bodies, and the dynamic bodies whose
+        // swept box meets a clamped body's.
         dirty.clear();
+        dirty.extend_from_slice(&changed);
         if changed.is_empty() {
             break;
         }
-        for &i in &changed {
-            let h = current[i].handle;
-            let against = if carried.contains(&h) {
-                Against::Blockers
-            } else if rerouted.contains(&h) {
-                Against::All
-            } else {
-                Against::Moving
-            };
-            dirty.push((i, against));
-        }
         let boxes: Vec<_> = changed
             .iter()
-            .filter_map(|&i| body_box(scene, &current[i]))
+            .filter_map(|&i| body_box(scene, &moved[i]))
             .collect();
         for (j, m) in current.iter().enumerate() {
-            // A carried body rides with its pusher: what it meets is
-            // carried in turn, it is not stopped by it.
-            if changed_set.contains(&m.handle) || carried.contains(&m.handle) {
+            if changed_set.contains(&m.handle) {
                 continue;
             }
             let Some(rb) = scene.bodies.get(m.handle) else {
@@ -556,7 +434,7 @@ fn sweep_all(
             if let Some(b) = body_box(scene, m)
                 && boxes.iter().any(|c| c.intersects(&b))
             {
-                dirty.push((j, Against::Changed));
+                dirty.push(j);
             }
         }
     }
@@ -568,7 +446,6 @@ fn sweep_all(
     Plan {
         moved: current,
         scale,
-        velocity,
         hits,
         sensors,
     }

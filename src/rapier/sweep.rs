@@ -43,13 +43,8 @@ pub(crate) enum Targets<'a> {
     /// own motion was cut short: against fixed targets it only covers part
     /// of the path already cleared, against moving ones its timing changed).
     Moving,
-    /// Only colliders of these bodies (whose motion was cut short, or
-    /// fast kinematic bodies and what they carry).
+    /// Only colliders of these bodies (whose motion was cut short).
     Only(&'a HashSet<RigidBodyHandle>),
-    /// Everything but dynamic bodies and these (a body carried by a
-    /// kinematic one: what it meets on the way is pushed in turn, the
-    /// pushers carry it, only the rest stops it).
-    Blockers(&'a HashSet<RigidBodyHandle>),
 }
 
 /// Reused buffers; `motions` caches target motions for one step (clear it
@@ -321,9 +316,6 @@ pub(crate) fn sweep_body(
                 Targets::All => true,
                 Targets::Moving => parent.is_some_and(|b| motions.body(b).is_some()),
                 Targets::Only(set) => parent.is_some_and(|b| set.contains(&b)),
-                Targets::Blockers(set) => !parent.is_some_and(|b| {
-                    set.contains(&b) || scene.bodies.get(b).is_some_and(|rb| rb.is_dynamic())
-                }),
             };
             if !wanted {
                 continue;
