@@ -27,8 +27,10 @@ struct Run {
 
 impl Run {
     fn new(ccd: Ccd, gravity: Vector) -> Run {
-        let mut world = PhysicsWorld::default();
-        world.gravity = gravity;
+        let mut world = PhysicsWorld {
+            gravity,
+            ..PhysicsWorld::default()
+        };
         let stage = (ccd == Ccd::Affine).then(|| {
             let stage = AffineCcd::new(CcdConfig::default());
             stage.install(&mut world);

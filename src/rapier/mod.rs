@@ -18,8 +18,13 @@
 //! off), then sweep the bodies that moved fast enough to tunnel from their
 //! old to their new pose and put each back to its pose just before its
 //! first impact (velocities kept). A step without fast bodies touches
-//! nothing. Not done yet: splitting the step at the first impact (rapier's
-//! `max_ccd_substeps > 1`); targets are swept with their unclamped motion.
+//! nothing. After a clamp, what it changed is swept again against the cut
+//! motions (see `sweep_all`). A pair already touching at the start is
+//! rapier's contacts' unless it goes deeper than `CcdConfig::sink`
+//! (sampled, see `sweep::touching_pair`). Not done yet: splitting the step
+//! at the first impact (rapier's `max_ccd_substeps > 1`); fast kinematic
+//! bodies are not swept (a fast kinematic paddle passes through resting
+//! dynamic bodies, as with rapier's own CCD).
 
 mod candidates;
 mod clamp;

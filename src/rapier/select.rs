@@ -169,7 +169,8 @@ const SPIN_MATCH: f64 = std::f64::consts::FRAC_PI_4;
 pub(crate) fn turn_hint(rb: &RigidBody, start: &Pose, end: &Pose, dt: f64) -> Vector {
     let angvel = rb.angvel();
     let spin = angvel.length() as f64 * dt;
-    if !(spin > PI) {
+    // At most half a turn (or NaN): the shortest rotation is the one.
+    if spin.partial_cmp(&PI) != Some(std::cmp::Ordering::Greater) {
         return angvel;
     }
     let com = rb.local_center_of_mass();
