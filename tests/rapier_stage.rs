@@ -3,8 +3,7 @@
 //! setting). The stage must never tunnel where rapier does not, and must
 //! not tunnel at all in these scenes.
 //!
-//! Run: `cargo test --release --test rapier_stage` (add `-- --ignored` for
-//! the scenes the temporary parry shim cannot answer yet).
+//! Run: `cargo test --release --test rapier_stage`.
 
 use affine_ccd::rapier::{AffineCcd, CcdConfig, SkipReason};
 use rapier3d::parry::shape::Cuboid;
@@ -161,7 +160,6 @@ fn fall_on_half_space(ccd: Ccd, collider: ColliderBuilder) -> f32 {
 }
 
 #[test]
-#[ignore = "needs the real query: parry's nonlinear cast answers Unsupported against a HalfSpace"]
 fn a_ball_and_a_cylinder_falling_fast_stay_above_a_half_space() {
     for (name, collider, half_height) in [
         ("ball", ColliderBuilder::ball(0.25), 0.25),
