@@ -30,8 +30,10 @@ fn growth(points: &[(f64, f64)]) -> f64 {
 /// `n` balls fired at 150 m/s at a thin wall, one step timed (median of 5
 /// steps after the first).
 fn fast_bodies(n: usize) -> f64 {
-    let mut world = PhysicsWorld::default();
-    world.gravity = Vector::ZERO;
+    let mut world = PhysicsWorld {
+        gravity: Vector::ZERO,
+        ..PhysicsWorld::default()
+    };
     let mut ccd = AffineCcd::default();
     ccd.install(&mut world);
     let wall = world.insert_body(RigidBodyBuilder::fixed());

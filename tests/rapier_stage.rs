@@ -3,8 +3,7 @@
 //! setting). The stage must never tunnel where rapier does not, and must
 //! not tunnel at all in these scenes.
 //!
-//! Run: `cargo test --release --test rapier_stage` (add `-- --ignored` for
-//! the scenes the temporary parry shim cannot answer yet).
+//! Run: `cargo test --release --test rapier_stage`.
 
 use affine_ccd::rapier::{AffineCcd, CcdConfig, SkipReason};
 use rapier3d::parry::shape::Cuboid;
@@ -27,8 +26,10 @@ struct Run {
 
 impl Run {
     fn new(ccd: Ccd, gravity: Vector) -> Run {
-        let mut world = PhysicsWorld::default();
-        world.gravity = gravity;
+        let mut world = PhysicsWorld {
+            gravity,
+            ..PhysicsWorld::default()
+        };
         let stage = (ccd == Ccd::Affine).then(|| {
             let stage = AffineCcd::new(CcdConfig::default());
             stage.install(&mut world);

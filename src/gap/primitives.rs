@@ -360,6 +360,11 @@ impl<E: Enclosure> GapSet<E> for LinearPrimitive {
         1
     }
 
+    /// The adaptive direction makes the axes inexact.
+    fn is_exact(&self, _pair: usize) -> bool {
+        false
+    }
+
     fn axis_count(&self, _pair: usize) -> usize {
         match self.kind {
             Kind::VertexFace => VERTEX_FACE_AXES,

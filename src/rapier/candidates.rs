@@ -67,15 +67,13 @@ impl<'a> Motions<'a> {
     }
 }
 
-/// A box holding `shape` over the whole `motion` (`pose` is the end pose):
+/// A box holding `shape` over the whole `motion`:
 /// every point stays within the travel bound of both its start and its end.
-pub(crate) fn swept_aabb(
-    shape: &dyn Shape,
-    motion: &Motion,
-    end: &rapier3d::prelude::Pose,
-) -> Aabb {
+pub(crate) fn swept_aabb(shape: &dyn Shape, motion: &Motion) -> Aabb {
     use crate::motion::Trajectory;
-    let end_box = shape.compute_aabb(end);
+    // The motion's own end: a motion cut by a clamp (possibly to a
+    // standstill) ends before the collider's pose.
+    let end_box = shape.compute_aabb(&super::convert::pose_from_iso(&motion.pose_at(1.0)));
     if motion.is_fixed() {
         return end_box;
     }

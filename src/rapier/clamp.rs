@@ -11,23 +11,27 @@ use crate::error::CcdError;
 use crate::motion::{Motion, Trajectory};
 use rapier3d::prelude::{ColliderSet, RigidBodySet};
 
-/// Moves the body to its pose at `fraction` of its motion over the step.
-/// `set_position` marks it modified, so rapier resyncs its colliders and
-/// broad-phase boxes at the next step's start; call
-/// [`sync_colliders`] once after all clamps for queries in between.
-pub(crate) fn clamp(
-    bodies: &mut RigidBodySet,
+/// The body's motion cut short at `fraction`: it ends at its pose at
+/// `fraction`, and runs between its two poses as every motion between two
+/// poses does in the stage (whole turns from the angular velocity only when
+/// it matches, `select::turn_hint`). `true` with it when that is not the
+/// same path as the part of the old motion (a fast spinner cut where its
+/// orientation matches a free spin again): the cut motion then needs a
+/// full sweep.
+pub(crate) fn truncate(
+    bodies: &RigidBodySet,
     body: &Moved,
     fraction: f64,
     dt: f64,
-) -> Result<(), CcdError> {
+) -> Result<(Moved, bool), CcdError> {
     let Some(rb) = bodies.get(body.handle) else {
-        return Ok(());
+        return Ok((*body, false));
     };
+    let com = point_from_glam(rb.local_center_of_mass());
     let motion = Motion::from_poses(
         iso_from_pose(&body.start),
         iso_from_pose(&body.end),
-        point_from_glam(rb.local_center_of_mass()),
+        com,
         dt,
         vec_from_glam(body.angvel),
     )?;
@@ -38,10 +42,33 @@ pub(crate) fn clamp(
             value: f64::NAN,
         });
     }
+    let hint = super::select::turn_hint(rb, &body.start, &pose, dt);
+    let cut = Motion::from_poses(
+        iso_from_pose(&body.start),
+        iso_from_pose(&pose),
+        com,
+        dt,
+        vec_from_glam(hint),
+    )?;
+    let rerouted = (cut.rotation() - motion.rotation() * fraction).norm() > 1.0e-3;
+    Ok((
+        Moved {
+            end: pose,
+            angvel: hint,
+            ..*body
+        },
+        rerouted,
+    ))
+}
+
+/// Moves the body to the end of its (cut) motion. `set_position` marks it
+/// modified, so rapier resyncs its colliders and broad-phase boxes at the
+/// next step's start; call [`sync_colliders`] once after all clamps for
+/// queries in between.
+pub(crate) fn clamp(bodies: &mut RigidBodySet, body: &Moved) {
     if let Some(rb) = bodies.get_mut(body.handle) {
-        rb.set_position(pose, true);
+        rb.set_position(body.end, true);
     }
-    Ok(())
 }
 
 /// Brings the colliders of clamped bodies to their new poses now, so that

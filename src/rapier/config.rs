@@ -48,6 +48,11 @@ pub struct CcdConfig {
     /// contacts see the pair (rapier's prediction distance is 2 mm by
     /// default).
     pub skin: f64,
+    /// Metres a fast body touching something at the start of a step may
+    /// sink into it during the step (beyond its start depth) before the
+    /// stage stops it. Rapier's contacts own such pairs; this only keeps the
+    /// solver from pushing a fast body deep (a spinning edge into a wall).
+    pub sink: f64,
     #[serde(with = "ArithmeticDef")]
     pub arithmetic: Arithmetic,
     /// Evaluation budget per swept collider per step. When it runs out the
@@ -69,6 +74,7 @@ impl Default for CcdConfig {
         CcdConfig {
             epsilon: 1.0e-4,
             skin: 1.0e-3,
+            sink: 5.0e-3,
             arithmetic: Arithmetic::default(),
             max_evaluations: 100_000,
             fast_factor: 0.5,

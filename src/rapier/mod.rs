@@ -18,8 +18,13 @@
 //! off), then sweep the bodies that moved fast enough to tunnel from their
 //! old to their new pose and put each back to its pose just before its
 //! first impact (velocities kept). A step without fast bodies touches
-//! nothing. Not done yet: splitting the step at the first impact (rapier's
-//! `max_ccd_substeps > 1`); targets are swept with their unclamped motion.
+//! nothing. After a clamp, what it changed is swept again against the cut
+//! motions (see `sweep_all`). A pair already touching at the start is
+//! rapier's contacts' unless it goes deeper than `CcdConfig::sink`
+//! (sampled, see `sweep::touching_pair`). Not done yet: splitting the step
+//! at the first impact (rapier's `max_ccd_substeps > 1`); fast kinematic
+//! bodies are not swept (a fast kinematic paddle passes through resting
+//! dynamic bodies, as with rapier's own CCD).
 
 mod candidates;
 mod clamp;
@@ -41,7 +46,8 @@ use query::QueryOptions;
 use rapier3d::prelude::{
     BroadPhaseBvh, CCDSolver, ColliderSet, CollisionEvent, CollisionEventFlags, EventHandler,
     ImpulseJointSet, IntegrationParameters, IslandManager, MultibodyJointSet, NarrowPhase,
-    PhysicsHooks, PhysicsPipeline, PhysicsWorld, RigidBodySet, SoftBodySet, Vector,
+    PhysicsHooks, PhysicsPipeline, PhysicsWorld, RigidBodyHandle, RigidBodySet, SoftBodySet,
+    Vector,
 };
 use select::{Moved, Start};
 use std::time::Instant;
@@ -242,24 +248,19 @@ impl AffineCcd {
     ) {
         let mut stops = std::collections::HashMap::new();
         for (i, hit) in &plan.hits {
-            let body = &self.moved[*i];
-            match clamp::clamp(bodies, body, hit.toi.fraction, dt) {
-                Ok(()) => {
-                    stops.insert(body.handle, hit.toi.fraction);
-                    self.report.hits.push(CcdHitEvent {
-                        body: body.handle,
-                        collider1: hit.collider1,
-                        collider2: hit.collider2,
-                        fraction: hit.toi.fraction,
-                        time: hit.toi.fraction * dt,
-                        point: convert::glam_from_vec(&hit.toi.witness1.coords),
-                        normal: convert::glam_from_vec(&hit.toi.normal1),
-                    });
-                }
-                Err(e) => self
-                    .report
-                    .skip(body.handle, SkipReason::Query(e.to_string())),
-            }
+            let body = &plan.moved[*i];
+            clamp::clamp(bodies, body);
+            let fraction = plan.scale[*i];
+            stops.insert(body.handle, fraction);
+            self.report.hits.push(CcdHitEvent {
+                body: body.handle,
+                collider1: hit.collider1,
+                collider2: hit.collider2,
+                fraction,
+                time: fraction * dt,
+                point: convert::glam_from_vec(&hit.toi.witness1.coords),
+                normal: convert::glam_from_vec(&hit.toi.normal1),
+            });
         }
         if !plan.hits.is_empty() {
             clamp::sync_colliders(bodies, colliders);
@@ -308,11 +309,23 @@ fn touches_at(
 /// What the sweeps found, applied after all of them (so that the order of
 /// the bodies does not matter).
 struct Plan {
-    /// Index into the moved bodies, and the body's earliest impact.
+    /// The moved bodies, each with its motion as cut by the sweeps.
+    moved: Vec<Moved>,
+    /// Per moved body, the share of its motion it keeps (1: not clamped).
+    scale: Vec<f64>,
+    /// Index into `moved` of each clamped body, and its last impact.
     hits: Vec<(usize, sweep::BodyHit)>,
     sensors: Vec<SensorPair>,
 }
 
+/// Rounds of re-sweeping after clamps (the first sweep included).
+const MAX_ROUNDS: usize = 8;
+
+/// Sweeps the fast bodies; then, while some body was clamped, sweeps again
+/// what the clamps changed: a clamped body against the moving bodies (its
+/// timing changed), and every dynamic body near a clamped one against it
+/// (it was solved against the uncut motion). Re-sweeps use half the skin,
+/// so a pair left a skin apart by an earlier clamp does not clamp again.
 #[allow(clippy::too_many_arguments)]
 fn sweep_all(
     scene: &Scene,
@@ -324,35 +337,135 @@ fn sweep_all(
     ws: &mut Workspace,
     report: &mut CcdReport,
 ) -> Plan {
-    let motions = Motions::new(moved, dt);
+    use rapier3d::parry::bounding_volume::BoundingVolume;
+    use std::collections::HashSet;
     let dispatcher = narrow_phase.query_dispatcher();
-    let mut plan = Plan {
-        hits: Vec::new(),
-        sensors: Vec::new(),
+    let mut current = moved.to_vec();
+    let mut scale = vec![1.0; moved.len()];
+    let mut last: Vec<Option<sweep::BodyHit>> = vec![None; moved.len()];
+    let mut sensors = Vec::new();
+    let mut dirty: Vec<usize> = (0..moved.len()).filter(|&i| moved[i].fast).collect();
+    let mut changed_set: HashSet<RigidBodyHandle> = HashSet::new();
+    let mut changed: Vec<usize> = Vec::new();
+    // Clamped bodies whose cut motion is not part of the old path.
+    let mut rerouted: HashSet<RigidBodyHandle> = HashSet::new();
+    let resweep = QueryOptions {
+        skin: 0.5 * opts.skin,
+        ..*opts
     };
-    ws.motions.clear();
-    for (i, body) in moved.iter().enumerate().filter(|(_, m)| m.fast) {
-        report.bodies_swept += 1;
-        let mut sensors = Vec::new();
-        match sweep::sweep_body(
-            scene,
-            broad_phase,
-            dispatcher,
-            &motions,
-            body,
-            opts,
-            ws,
-            report,
-            &mut sensors,
-        ) {
-            Ok(hit) => {
-                if let Some(hit) = hit {
-                    plan.hits.push((i, hit));
+    for round in 0..MAX_ROUNDS {
+        if dirty.is_empty() {
+            break;
+        }
+        let motions = Motions::new(&current, dt);
+        ws.motions.clear();
+        let mut found = Vec::new();
+        for &i in &dirty {
+            let body = &current[i];
+            let (targets, round_opts) = if round == 0 {
+                (sweep::Targets::All, opts)
+            } else if rerouted.contains(&body.handle) {
+                (sweep::Targets::All, &resweep)
+            } else if changed_set.contains(&body.handle) {
+                (sweep::Targets::Moving, &resweep)
+            } else {
+                (sweep::Targets::Only(&changed_set), &resweep)
+            };
+            report.bodies_swept += 1;
+            let mut body_sensors = Vec::new();
+            match sweep::sweep_body(
+                scene,
+                broad_phase,
+                dispatcher,
+                &motions,
+                body,
+                targets,
+                round_opts,
+                ws,
+                report,
+                &mut body_sensors,
+            ) {
+                Ok(hit) => {
+                    if let Some(hit) = hit.filter(|h| h.toi.fraction < 1.0) {
+                        found.push((i, hit));
+                    }
+                    if round == 0 {
+                        sensors.append(&mut body_sensors);
+                    }
                 }
-                plan.sensors.append(&mut sensors);
+                Err(e) => report.skip(body.handle, SkipReason::Query(e.to_string())),
             }
-            Err(e) => report.skip(body.handle, SkipReason::Query(e.to_string())),
+        }
+        // Cut the motions after all sweeps of the round.
+        changed.clear();
+        changed_set.clear();
+        rerouted.clear();
+        for (i, hit) in found {
+            match clamp::truncate(scene.bodies, &current[i], hit.toi.fraction, dt) {
+                Ok((cut, new_path)) => {
+                    if new_path {
+                        rerouted.insert(cut.handle);
+                    }
+                    current[i] = cut;
+                    scale[i] *= hit.toi.fraction;
+                    last[i] = Some(hit);
+                    changed.push(i);
+                    changed_set.insert(cut.handle);
+                }
+                Err(e) => report.skip(current[i].handle, SkipReason::Query(e.to_string())),
+            }
+        }
+        // Next round: the clamped bodies, and the dynamic bodies whose
+        // swept box meets a clamped body's.
+        dirty.clear();
+        dirty.extend_from_slice(&changed);
+        if changed.is_empty() {
+            break;
+        }
+        let boxes: Vec<_> = changed
+            .iter()
+            .filter_map(|&i| body_box(scene, &moved[i]))
+            .collect();
+        for (j, m) in current.iter().enumerate() {
+            if changed_set.contains(&m.handle) {
+                continue;
+            }
+            let Some(rb) = scene.bodies.get(m.handle) else {
+                continue;
+            };
+            if !rb.is_dynamic() || scene.config.opted_out(rb.user_data) {
+                continue;
+            }
+            if let Some(b) = body_box(scene, m)
+                && boxes.iter().any(|c| c.intersects(&b))
+            {
+                dirty.push(j);
+            }
         }
     }
-    plan
+    let hits = last
+        .iter()
+        .enumerate()
+        .filter_map(|(i, h)| h.map(|h| (i, h)))
+        .collect();
+    Plan {
+        moved: current,
+        scale,
+        hits,
+        sensors,
+    }
+}
+
+/// A box holding the body's colliders over its whole (uncut) motion: their
+/// end boxes grown by the body's travel bound.
+fn body_box(scene: &Scene, m: &Moved) -> Option<rapier3d::parry::bounding_volume::Aabb> {
+    use rapier3d::parry::bounding_volume::BoundingVolume;
+    let rb = scene.bodies.get(m.handle)?;
+    let margin = ((m.travel * (1.0 + 1.0e-5)) as f32).next_up() + 1.0e-5;
+    rb.colliders()
+        .iter()
+        .filter_map(|h| scene.colliders.get(*h))
+        .filter(|co| co.is_enabled())
+        .map(|co| co.compute_aabb().loosened(margin))
+        .reduce(|a, b| a.merged(&b))
 }

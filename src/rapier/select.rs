@@ -145,9 +145,59 @@ pub(crate) fn moved(
             handle: start.handle,
             start: start.pose,
             end,
-            angvel: rb.angvel(),
+            angvel: turn_hint(rb, &start.pose, &end, dt),
             fast,
             travel,
         });
+    }
+}
+
+/// How far from a free spin (radians) the end orientation may be for the
+/// angular velocity to choose the whole turns of the motion.
+const SPIN_MATCH: f64 = std::f64::consts::FRAC_PI_4;
+
+/// The angular velocity that chooses the whole turns of the motion from
+/// `start` to `end` (see `Motion::from_poses`): the body's own when the end
+/// orientation is within [`SPIN_MATCH`] of a free spin at it, else zero
+/// (the shortest rotation). A contact that changed the spin during the step
+/// (a bounce) leaves an angular velocity that says nothing of the turns
+/// made, and adding a whole turn the body never made would sweep a path
+/// it never took (and miss the one it did). Likewise when the centre of
+/// mass did not move as a free flight at the body's velocity (a clamp that
+/// happens to leave the orientation one free spin on). The same convention
+/// as the scene oracle's (`scenes::motion::BodyMotion::between_free`).
+pub(crate) fn turn_hint(rb: &RigidBody, start: &Pose, end: &Pose, dt: f64) -> Vector {
+    let angvel = rb.angvel();
+    let spin = angvel.length() as f64 * dt;
+    // At most half a turn (or NaN): the shortest rotation is the one.
+    if spin.partial_cmp(&PI) != Some(std::cmp::Ordering::Greater) {
+        return angvel;
+    }
+    let com = rb.local_center_of_mass();
+    let delta = *end * com - *start * com;
+    if !crate::scenes::motion::free_flight(delta, rb.linvel(), dt as f32) {
+        return Vector::ZERO;
+    }
+    let dq = end.rotation * start.rotation.inverse();
+    let (axis, angle) = dq.to_axis_angle();
+    let (axis, angle) = (
+        nalgebra::Vector3::new(axis.x as f64, axis.y as f64, axis.z as f64),
+        angle as f64,
+    );
+    let w = nalgebra::Vector3::new(angvel.x as f64, angvel.y as f64, angvel.z as f64) * dt;
+    // The turn about the axis oriented along the spin, whole turns added
+    // to come nearest the spin's component along it.
+    let (axis, signed) = if axis.dot(&w) < 0.0 {
+        (-axis, -angle)
+    } else {
+        (axis, angle)
+    };
+    let along = w.dot(&axis);
+    let turns = ((along - signed) / std::f64::consts::TAU).round();
+    let unwrapped = signed + turns * std::f64::consts::TAU;
+    if (unwrapped - along).abs() <= SPIN_MATCH {
+        angvel
+    } else {
+        Vector::ZERO
     }
 }

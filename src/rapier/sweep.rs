@@ -11,10 +11,11 @@ use crate::enclosure::TimeSpan;
 use crate::error::CcdError;
 use crate::motion::{Motion, Trajectory};
 use crate::solve::RootStatus;
-use rapier3d::parry::query::{DefaultQueryDispatcher, QueryDispatcher};
+use rapier3d::parry::query::QueryDispatcher;
 use rapier3d::parry::shape::Shape;
+use rapier3d::prelude::RigidBodyHandle;
 use rapier3d::prelude::{BroadPhaseBvh, ColliderHandle};
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 
 /// The earliest solid impact of one fast body.
 #[derive(Clone, Copy, Debug)]
@@ -33,6 +34,19 @@ pub(crate) struct SensorPair {
     pub motion2: Motion,
 }
 
+/// Which of a body's candidates a sweep looks at.
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum Targets<'a> {
+    /// Everything it may collide with (the first sweep of a fast body).
+    All,
+    /// Only colliders of bodies that moved during the step (a body whose
+    /// own motion was cut short: against fixed targets it only covers part
+    /// of the path already cleared, against moving ones its timing changed).
+    Moving,
+    /// Only colliders of these bodies (whose motion was cut short).
+    Only(&'a HashSet<RigidBodyHandle>),
+}
+
 /// Reused buffers; `motions` caches target motions for one step (clear it
 /// between steps).
 #[derive(Default)]
@@ -41,27 +55,143 @@ pub(crate) struct Workspace {
     pub motions: HashMap<ColliderHandle, Motion>,
 }
 
-/// Gap at the start of the step, metres (`None` when parry cannot tell).
-fn start_gap(s1: &dyn Shape, m1: &Motion, s2: &dyn Shape, m2: &Motion) -> Option<f64> {
-    let p1 = pose_from_iso(&m1.pose_at(0.0));
-    let p2 = pose_from_iso(&m2.pose_at(0.0));
-    DefaultQueryDispatcher
-        .distance(&p1.inv_mul(&p2), s1, s2)
-        .ok()
-        .map(|d| d.distance as f64)
+/// Signed gap at step fraction `tau` (negative: penetration depth), with
+/// the contact there; `None` when parry cannot tell. Gaps beyond `reach`
+/// come back as `reach` (and no contact).
+fn gap_at(
+    s1: &dyn Shape,
+    m1: &Motion,
+    s2: &dyn Shape,
+    m2: &Motion,
+    tau: f64,
+    reach: f64,
+) -> Option<(f64, Option<rapier3d::parry::query::Contact>)> {
+    let p1 = pose_from_iso(&m1.pose_at(tau));
+    let p2 = pose_from_iso(&m2.pose_at(tau));
+    // parry 0.31.1 answers a convex shape against a half-space wrongly
+    // (the depth grows with the distance from the plane's origin); the
+    // half-space first is right.
+    let flip = s2.as_halfspace().is_some() && s1.as_halfspace().is_none();
+    let found = if flip {
+        rapier3d::parry::query::contact(&p2, s2, &p1, s1, reach as f32)
+            .map(|c| c.map(|c| c.flipped()))
+    } else {
+        rapier3d::parry::query::contact(&p1, s1, &p2, s2, reach as f32)
+    };
+    match found {
+        Ok(Some(c)) => Some((c.dist as f64, Some(c))),
+        Ok(None) => Some((reach, None)),
+        Err(_) => None,
+    }
+}
+
+/// Most samples a pair touching at the start takes over the step.
+const MAX_TOUCH_SAMPLES: usize = 64;
+
+/// A pair already touching (within the skin) at the start: rapier's
+/// contacts own it, unless it goes deeper than `max(start depth, sink)` or
+/// separates and comes back. Walks the step in samples fine enough that no
+/// point moves more than the sink between two (at most
+/// [`MAX_TOUCH_SAMPLES`]): at the first sample deeper than allowed the time
+/// is bisected down to the last allowed one and returned; at the first
+/// sample apart by more than the skin the sound query takes over for the
+/// rest of the step. This is parry's sampled depth, not a proof: the stage
+/// is sound for pairs apart at the start; for touching ones it only stops
+/// the solver from pushing a fast body deep.
+fn touching_pair(
+    moving: &ShapeMotion,
+    target: &ShapeMotion,
+    gap0: f64,
+    sink: f64,
+    opts: &QueryOptions,
+    report: &mut CcdReport,
+) -> Result<Option<Toi>, CcdError> {
+    let (s1, m1, s2, m2) = (moving.shape, &moving.motion, target.shape, &target.motion);
+    let allowed = (-gap0).max(sink);
+    let radius = |s: &dyn Shape| {
+        let b = s.compute_local_bounding_sphere();
+        b.center.length() as f64 + b.radius as f64
+    };
+    let travel = m1.travel_bound(radius(s1)) + m2.travel_bound(radius(s2));
+    let reach = opts.skin.max(allowed) + 1.0;
+    let samples = ((travel / sink).ceil() as usize).clamp(4, MAX_TOUCH_SAMPLES);
+    let lo = opts.time_range.lo;
+    let width = opts.time_range.hi - lo;
+    let mut prev = lo;
+    for k in 1..=samples {
+        let tau = lo + width * k as f64 / samples as f64;
+        let Some((gap, _)) = gap_at(s1, m1, s2, m2, tau, reach) else {
+            return Ok(None);
+        };
+        if -gap > allowed {
+            // Deeper than allowed: the last allowed time, by bisection.
+            let (mut ok, mut bad) = (prev, tau);
+            for _ in 0..12 {
+                let mid = 0.5 * (ok + bad);
+                match gap_at(s1, m1, s2, m2, mid, reach) {
+                    Some((g, _)) if -g <= allowed => ok = mid,
+                    _ => bad = mid,
+                }
+            }
+            let (_, contact) = gap_at(s1, m1, s2, m2, ok, reach).unwrap_or((0.0, None));
+            let (w1, w2, n) = contact.map_or(
+                (
+                    m1.pose_at(ok).translation.vector,
+                    m2.pose_at(ok).translation.vector,
+                    nalgebra::Vector3::zeros(),
+                ),
+                |c| {
+                    (
+                        super::convert::vec_from_glam(c.point1),
+                        super::convert::vec_from_glam(c.point2),
+                        super::convert::vec_from_glam(c.normal1),
+                    )
+                },
+            );
+            return Ok(Some(Toi {
+                fraction: ok,
+                time: ok * m1.dt().max(m2.dt()),
+                status: RootStatus::Hit,
+                witness1: w1.into(),
+                witness2: w2.into(),
+                normal1: n,
+                stats: Default::default(),
+            }));
+        }
+        if gap > opts.skin {
+            // Apart: the sound query for the rest of the step.
+            let rest = QueryOptions {
+                time_range: TimeSpan::new(tau, opts.time_range.hi),
+                ..*opts
+            };
+            if let Some(toi) = time_of_impact(s1, m1, s2, m2, &rest)? {
+                report.evaluations += toi.stats.pair_evaluations;
+                if toi.status != RootStatus::InitiallyTouching {
+                    return Ok(Some(toi));
+                }
+                prev = tau;
+                continue;
+            }
+            return Ok(None);
+        }
+        prev = tau;
+    }
+    Ok(None)
 }
 
 /// Earliest impact of `moving` against `targets`, all pairs in one search.
 ///
 /// A pair already within the skin at the start is taken out of the joint
-/// search: if it is apart it is asked again alone with half its start gap
-/// as skin (it may close that much, not more); if it touches it is left to
-/// rapier's contacts, as an impact at τ = 0 would freeze a body resting or
-/// sliding on the ground.
+/// search and handed to [`touching_pair`]: rapier's contacts own it unless
+/// it goes deeper than `max(start depth, sink)` or separates and comes
+/// back (rapier's `stop_at_penetration = false`: a touching pair counts
+/// only when the motion makes it deeper). An impact at τ = 0 for every
+/// touching pair would freeze a body resting or sliding on the ground.
 fn earliest(
     moving: &ShapeMotion,
     targets: &[ShapeMotion],
     opts: &QueryOptions,
+    sink: f64,
     report: &mut CcdReport,
 ) -> Result<Option<(Toi, usize)>, CcdError> {
     let mut alive: Vec<usize> = (0..targets.len()).collect();
@@ -90,22 +220,14 @@ fn earliest(
         report.pairs_touching_at_start += 1;
         alive.remove(many.target);
         let t = &targets[j];
-        let Some(gap) = start_gap(moving.shape, &moving.motion, t.shape, &t.motion) else {
+        let reach = opts.skin + 1.0;
+        let lo = opts.time_range.lo;
+        let Some((gap, _)) = gap_at(moving.shape, &moving.motion, t.shape, &t.motion, lo, reach)
+        else {
             continue;
         };
-        if gap > 0.0 {
-            let alone = QueryOptions {
-                skin: 0.5 * gap.min(opts.skin),
-                ..*opts
-            };
-            if let Some(toi) =
-                time_of_impact(moving.shape, &moving.motion, t.shape, &t.motion, &alone)?
-            {
-                report.evaluations += toi.stats.pair_evaluations;
-                if toi.status != RootStatus::InitiallyTouching {
-                    keep(toi, j, &mut best);
-                }
-            }
+        if let Some(toi) = touching_pair(moving, t, gap, sink, opts, report)? {
+            keep(toi, j, &mut best);
         }
     }
     Ok(best)
@@ -139,6 +261,7 @@ pub(crate) fn sweep_body(
     dispatcher: &dyn QueryDispatcher,
     motions: &Motions,
     body: &Moved,
+    targets: Targets,
     opts: &QueryOptions,
     ws: &mut Workspace,
     report: &mut CcdReport,
@@ -153,7 +276,7 @@ pub(crate) fn sweep_body(
             continue;
         };
         let motion1 = motions.collider(co1, scene.bodies)?;
-        let swept = swept_aabb(co1.shape(), &motion1, co1.position());
+        let swept = swept_aabb(co1.shape(), &motion1);
         let mut failure = None;
         let cache = &mut ws.motions;
         gather(
@@ -172,7 +295,7 @@ pub(crate) fn sweep_body(
             {
                 Ok(m) => {
                     cache.insert(h2, m);
-                    Some(swept_aabb(co2.shape(), &m, co2.position()))
+                    Some(swept_aabb(co2.shape(), &m))
                 }
                 Err(e) => {
                     failure = Some(e);
@@ -188,6 +311,15 @@ pub(crate) fn sweep_body(
         let mut handles = Vec::new();
         for c in &ws.candidates {
             let co2 = &scene.colliders[c.handle];
+            let parent = co2.parent();
+            let wanted = match targets {
+                Targets::All => true,
+                Targets::Moving => parent.is_some_and(|b| motions.body(b).is_some()),
+                Targets::Only(set) => parent.is_some_and(|b| set.contains(&b)),
+            };
+            if !wanted {
+                continue;
+            }
             let motion2 = match ws.motions.get(&c.handle) {
                 Some(m) => *m,
                 None => motions.collider(co2, scene.bodies)?,
@@ -216,7 +348,7 @@ pub(crate) fn sweep_body(
             shape: co1.shape(),
             motion: motion1,
         };
-        if let Some((toi, j)) = earliest(&moving, &solid, opts, report)? {
+        if let Some((toi, j)) = earliest(&moving, &solid, opts, scene.config.sink, report)? {
             if best.is_none_or(|b| toi.fraction < b.toi.fraction) {
                 best = Some(BodyHit {
                     toi,

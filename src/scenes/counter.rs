@@ -159,10 +159,11 @@ fn track<'a>(
         .get(&body_handle)
         .map(|s| s.pose)
         .unwrap_or(*body.position());
-    let motion = BodyMotion::between(
+    let motion = BodyMotion::between_free(
         &start,
         body.position(),
         local_com,
+        Some(body.linvel()),
         body.angvel(),
         world.integration_parameters.dt,
     );
@@ -217,7 +218,16 @@ fn may_collide(a: &Tracked, b: &Tracked) -> bool {
 /// when parry has no contact query for this shape pair.
 fn gap_at(a: &Tracked, b: &Tracked, t: Real, prediction: Real) -> Option<(Real, Vector)> {
     let (pa, pb) = (a.pose_at(t), b.pose_at(t));
-    match query::contact(&pa, a.collider.shape(), &pb, b.collider.shape(), prediction) {
+    let (sa, sb) = (a.collider.shape(), b.collider.shape());
+    // parry 0.31.1 answers a convex shape against a half-space wrongly (the
+    // depth grows with the distance from the plane's origin); the
+    // half-space first is right.
+    let found = if sb.as_halfspace().is_some() && sa.as_halfspace().is_none() {
+        query::contact(&pb, sb, &pa, sa, prediction).map(|c| c.map(|c| c.flipped()))
+    } else {
+        query::contact(&pa, sa, &pb, sb, prediction)
+    };
+    match found {
         Ok(Some(c)) => Some((c.dist, (c.point1 + c.point2) * 0.5)),
         Ok(None) => Some((prediction, (pa.translation + pb.translation) * 0.5)),
         Err(_) => None,

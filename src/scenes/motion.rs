@@ -47,9 +47,27 @@ impl BodyMotion {
     /// (seconds) are only used to count whole turns; rapier integrates the
     /// pose with the velocity at the end of the step, so pass that one.
     pub fn between(start: &Pose, end: &Pose, local_com: Vector, angvel: Vector, dt: Real) -> Self {
+        Self::between_free(start, end, local_com, None, angvel, dt)
+    }
+
+    /// [`BodyMotion::between`], and with `linvel` (m/s, the velocity at the
+    /// end of the step) the whole turns are only added when the step also
+    /// moved the centre of mass as a free flight at `linvel` does
+    /// ([`free_flight`]): a step cut short by a CCD clamp whose orientation
+    /// happens to match a free spin again is not taken for one.
+    pub fn between_free(
+        start: &Pose,
+        end: &Pose,
+        local_com: Vector,
+        linvel: Option<Vector>,
+        angvel: Vector,
+        dt: Real,
+    ) -> Self {
         let com0 = start.transform_point(local_com);
         let com1 = end.transform_point(local_com);
-        let (axis, angle) = unwrapped_turn(start.rotation, end.rotation, angvel, dt);
+        let free = linvel.is_none_or(|v| free_flight(com1 - com0, v, dt));
+        let spin = if free { angvel } else { Vector::ZERO };
+        let (axis, angle) = unwrapped_turn(start.rotation, end.rotation, spin, dt);
         Self {
             com0,
             delta: com1 - com0,
@@ -96,6 +114,15 @@ impl BodyMotion {
     pub fn max_point_travel(&self, radius: Real) -> Real {
         self.travel() + self.turn() * radius
     }
+}
+
+/// Whether a centre-of-mass displacement `delta` over a step of `dt`
+/// seconds is what a free flight at the end velocity `linvel` makes
+/// (rapier moves a body by its end velocity times `dt`): within a quarter
+/// of that distance, plus a millimetre. A clamped or bounced step is not.
+pub fn free_flight(delta: Vector, linvel: Vector, dt: Real) -> bool {
+    let expected = linvel * dt;
+    (delta - expected).length() <= 0.25 * expected.length() + 1.0e-3
 }
 
 /// Axis and signed angle of the turn from `q0` to `q1`, unwrapped by whole
