@@ -252,6 +252,7 @@ impl Query {
         };
         let toi = describe(
             &outcome,
+            options.skin,
             moving[i].shape,
             &moving[i].motion,
             targets[j].shape,
@@ -603,6 +604,7 @@ impl<E: Enclosure> GapSet<E> for PairSet<'_, E> {
 /// normal from parry's contact query at the poses of that time.
 fn describe(
     outcome: &SolveOutcome,
+    skin: f64,
     shape1: &dyn Shape,
     motion1: &Motion,
     shape2: &dyn Shape,
@@ -619,17 +621,25 @@ fn describe(
         shape2.shape_type(),
         rapier3d::parry::shape::ShapeType::HalfSpace
     );
-    let contact = if half_space_second {
-        rapier3d::parry::query::contact(&pose2, shape2, &pose1, shape1, f32::MAX)
-            .ok()
-            .flatten()
-            .map(|c| (c.point2, c.point1, c.normal2))
-    } else {
-        rapier3d::parry::query::contact(&pose1, shape1, &pose2, shape2, f32::MAX)
-            .ok()
-            .flatten()
-            .map(|c| (c.point1, c.point2, c.normal1))
+    let ask = |prediction: f32| {
+        if half_space_second {
+            rapier3d::parry::query::contact(&pose2, shape2, &pose1, shape1, prediction)
+                .ok()
+                .flatten()
+                .map(|c| (c.point2, c.point1, c.normal2))
+        } else {
+            rapier3d::parry::query::contact(&pose1, shape1, &pose2, shape2, prediction)
+                .ok()
+                .flatten()
+                .map(|c| (c.point1, c.point2, c.normal1))
+        }
     };
+    // At the reported time the shapes are about `skin` apart. A bounded
+    // prediction keeps parry's composite contact to the mesh parts nearby
+    // (an unbounded one visits every triangle); widen it only if needed.
+    let contact = [1.0e-2f32, 1.0, 1.0e2, f32::MAX]
+        .into_iter()
+        .find_map(|extra| ask(skin as f32 + extra));
     let (witness1, witness2, normal1) = match contact {
         Some((p1, p2, n1)) => (
             Point3::from(vec_from_glam(p1)),
