@@ -113,8 +113,10 @@ fn touching_pair(
         b.center.length() as f64 + b.radius as f64
     };
     let travel = m1.travel_bound(radius(s1)) + m2.travel_bound(radius(s2));
-    let reach = opts.skin.max(allowed) + 1.0;
     let samples = ((travel / sink).ceil() as usize).clamp(4, MAX_TOUCH_SAMPLES);
+    // parry's contact only needs to look as far as a sample can move: a
+    // larger prediction makes it visit every mesh part within it.
+    let reach = opts.skin.max(allowed) + travel / samples as f64 + 1.0e-3;
     let lo = opts.time_range.lo;
     let width = opts.time_range.hi - lo;
     let mut prev = lo;
@@ -220,7 +222,9 @@ fn earliest(
         report.pairs_touching_at_start += 1;
         alive.remove(many.target);
         let t = &targets[j];
-        let reach = opts.skin + 1.0;
+        // The pair is within the skin at the start: a small prediction
+        // finds its contact.
+        let reach = opts.skin + 1.0e-2;
         let lo = opts.time_range.lo;
         let Some((gap, _)) = gap_at(moving.shape, &moving.motion, t.shape, &t.motion, lo, reach)
         else {
