@@ -281,12 +281,7 @@ impl Solver {
             if frame.span.width() <= options.epsilon {
                 let floor = frame.span.width() <= options.epsilon * FLOOR_SHARE;
                 if floor || self.touching_at(gaps, clipped.hi, &node, &mut stats) {
-                    return Ok(SolveOutcome {
-                        status: RootStatus::Hit,
-                        time: clipped.lo,
-                        pair: Some(node.earliest_pair),
-                        stats,
-                    });
+                    return Ok(hit(clipped.lo, node.earliest_pair, stats));
                 }
             }
             let (start, end) = (node.start, node.end);
@@ -302,23 +297,9 @@ impl Solver {
                 // quadratically near a simple root; DESIGN.md's "split next
                 // to the left end", guarded by certainty).
                 if sure - clipped.lo <= options.epsilon {
-                    return Ok(SolveOutcome {
-                        status: RootStatus::Hit,
-                        time: clipped.lo,
-                        pair: Some(node.earliest_pair),
-                        stats,
-                    });
+                    return Ok(hit(clipped.lo, node.earliest_pair, stats));
                 }
-                self.stack.push(Frame {
-                    span: TimeSpan::new(sure, clipped.hi),
-                    start,
-                    end,
-                });
-                self.stack.push(Frame {
-                    span: TimeSpan::new(clipped.lo, sure),
-                    start,
-                    end,
-                });
+                self.push_halves(clipped, sure, start, end);
                 continue;
             }
             if clipped.width() < RECLIP_SHARE * frame.span.width() {
@@ -332,23 +313,9 @@ impl Solver {
             let mid = clipped.lo + 0.5 * clipped.width();
             if !(clipped.lo < mid && mid < clipped.hi) {
                 // No float between the ends: the node cannot be split.
-                return Ok(SolveOutcome {
-                    status: RootStatus::Hit,
-                    time: clipped.lo,
-                    pair: Some(node.earliest_pair),
-                    stats,
-                });
+                return Ok(hit(clipped.lo, node.earliest_pair, stats));
             }
-            self.stack.push(Frame {
-                span: TimeSpan::new(mid, clipped.hi),
-                start,
-                end,
-            });
-            self.stack.push(Frame {
-                span: TimeSpan::new(clipped.lo, mid),
-                start,
-                end,
-            });
+            self.push_halves(clipped, mid, start, end);
         }
         Ok(SolveOutcome {
             status: RootStatus::Separated,
@@ -356,6 +323,18 @@ impl Solver {
             pair: None,
             stats,
         })
+    }
+
+    /// Push `[span.lo, cut]` and `[cut, span.hi]` so that the earlier one
+    /// is searched first; both keep the alive pairs `arena[start..end]`.
+    fn push_halves(&mut self, span: TimeSpan, cut: f64, start: usize, end: usize) {
+        for half in [TimeSpan::new(cut, span.hi), TimeSpan::new(span.lo, cut)] {
+            self.stack.push(Frame {
+                span: half,
+                start,
+                end,
+            });
+        }
     }
 
     /// True when some surviving pair of `node` has every alive axis `≤ 0`
@@ -544,6 +523,16 @@ impl Solver {
             end: self.arena.len(),
             earliest_pair,
         })
+    }
+}
+
+/// A hit at `time` by `pair`.
+fn hit(time: f64, pair: usize, stats: SolveStats) -> SolveOutcome {
+    SolveOutcome {
+        status: RootStatus::Hit,
+        time,
+        pair: Some(pair),
+        stats,
     }
 }
 
