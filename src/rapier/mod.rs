@@ -21,10 +21,12 @@
 //! nothing. After a clamp, what it changed is swept again against the cut
 //! motions (see `sweep_all`). A pair already touching at the start is
 //! rapier's contacts' unless it goes deeper than `CcdConfig::sink`
-//! (sampled, see `sweep::touching_pair`). Not done yet: splitting the step
-//! at the first impact (rapier's `max_ccd_substeps > 1`); fast kinematic
-//! bodies are not swept (a fast kinematic paddle passes through resting
-//! dynamic bodies, as with rapier's own CCD).
+//! (sampled, see `sweep::touching_pair`). Fast kinematic bodies (rapier
+//! never sweeps them) push the dynamic bodies they would pass, in time
+//! order: each is carried from its time of impact, ends a skin ahead of its
+//! pusher with the pusher's velocity, and pushes in turn what it meets (see
+//! `push`). Not done yet: splitting the step at the first impact (rapier's
+//! `max_ccd_substeps > 1`).
 
 mod candidates;
 mod clamp;
@@ -600,7 +602,9 @@ fn push(
     let mut fresh: HashSet<RigidBodyHandle> = front.clone();
     let mut velocities: HashMap<RigidBodyHandle, Vector> = HashMap::new();
     let reach = 2.0 * opts.skin + 1.0e-4;
-    let mut near = |current: &mut Vec<Moved>, b: rapier3d::parry::bounding_volume::Aabb, cands: &mut Vec<Cand>| {
+    let mut near = |current: &mut Vec<Moved>,
+                    b: rapier3d::parry::bounding_volume::Aabb,
+                    cands: &mut Vec<Cand>| {
         let query = broad_phase.as_query_pipeline(
             dispatcher,
             scene.bodies,
