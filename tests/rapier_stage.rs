@@ -460,3 +460,53 @@ fn an_opted_out_body_is_not_clamped() {
         assert_eq!(run.stage.as_ref().unwrap().report().bodies_swept, 0);
     }
 }
+
+/// A 6 cm kinematic paddle at 60 m/s (1 m a step) towards two resting
+/// boxes 1 m apart, then back: the stage carries both ahead of it (neither
+/// ends behind it or inside the other) and leaves them there when it turns.
+#[test]
+fn a_fast_kinematic_paddle_pushes_a_train_and_lets_it_go() {
+    let mut world = PhysicsWorld {
+        gravity: Vector::ZERO,
+        ..PhysicsWorld::default()
+    };
+    let mut stage = AffineCcd::new(CcdConfig::default());
+    stage.install(&mut world);
+    let paddle = world.insert_body(
+        RigidBodyBuilder::kinematic_position_based().translation(Vector::new(-1.5, 0.0, 0.0)),
+    );
+    world.insert_collider(ColliderBuilder::cuboid(0.03, 0.5, 1.0), Some(paddle));
+    let boxes: Vec<_> = [0.0, 1.0]
+        .iter()
+        .map(|&x| {
+            world
+                .insert(
+                    RigidBodyBuilder::dynamic().translation(Vector::new(x, 0.0, 0.0)),
+                    ColliderBuilder::cuboid(0.2, 0.2, 0.2),
+                )
+                .0
+        })
+        .collect();
+    let x = |world: &PhysicsWorld, h: RigidBodyHandle| world.bodies[h].translation().x;
+    let mut at = -1.5;
+    for step in 0..6 {
+        at += if step < 4 { 1.0 } else { -1.0 };
+        world.bodies[paddle]
+            .set_next_kinematic_position(Pose::from_translation(Vector::new(at, 0.0, 0.0)));
+        stage.step(&mut world);
+        let p = x(&world, paddle);
+        let (a, b) = (x(&world, boxes[0]), x(&world, boxes[1]));
+        if step < 4 {
+            assert!(
+                a - 0.2 >= p + 0.03 - 1.0e-3,
+                "step {step}: box 0 at {a} behind the paddle at {p}"
+            );
+        }
+        assert!(
+            b - a >= 0.4 - 1.0e-2,
+            "step {step}: the boxes overlap ({a}, {b})"
+        );
+    }
+    let v = world.bodies[boxes[0]].linvel().x;
+    assert!(v > 30.0, "the pushed box keeps the paddle's speed, not {v}");
+}

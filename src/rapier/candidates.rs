@@ -126,7 +126,7 @@ fn body_type(scene: &Scene, co: &Collider) -> RigidBodyType {
 
 /// Rapier's rules for whether the fast collider `(h1, co1)` and `(h2, co2)`
 /// interact, and how; `None` when they do not.
-fn pair_kind(
+pub(crate) fn pair_kind(
     scene: &Scene,
     h1: ColliderHandle,
     co1: &Collider,

@@ -61,6 +61,60 @@ pub(crate) fn truncate(
     ))
 }
 
+/// The body carried from `fraction` on by `pusher` (a kinematic body, or a
+/// body it carries): its pose at `fraction` moved rigidly with the pusher
+/// to the pusher's end, and the pusher's velocity at its centre of mass
+/// there. It ends touching the pusher (a skin apart), so the next step's
+/// contacts push it on; between its two poses it keeps the relative
+/// approach of its first `fraction` of the step, so it meets the pusher
+/// nowhere before.
+pub(crate) fn carry(
+    bodies: &RigidBodySet,
+    body: &Moved,
+    pusher: &Moved,
+    fraction: f64,
+    dt: f64,
+) -> Result<(Moved, rapier3d::prelude::Vector), CcdError> {
+    let (Some(rb), Some(pb)) = (bodies.get(body.handle), bodies.get(pusher.handle)) else {
+        return Err(CcdError::NonFinite {
+            what: "carried body",
+            value: f64::NAN,
+        });
+    };
+    let motion = |m: &Moved, com| {
+        Motion::from_poses(
+            iso_from_pose(&m.start),
+            iso_from_pose(&m.end),
+            point_from_glam(com),
+            dt,
+            vec_from_glam(m.angvel),
+        )
+    };
+    let own = motion(body, rb.local_center_of_mass())?;
+    let push = motion(pusher, pb.local_center_of_mass())?;
+    let end = push.pose_at(1.0) * push.pose_at(fraction).inverse() * own.pose_at(fraction);
+    let end = pose_from_iso(&end);
+    if !end.is_finite() {
+        return Err(CcdError::NonFinite {
+            what: "carried pose",
+            value: f64::NAN,
+        });
+    }
+    let com = end * rb.local_center_of_mass();
+    let pcom = pusher.end * pb.local_center_of_mass();
+    let velocity = pb.linvel() + pb.angvel().cross(com - pcom);
+    let travel = super::select::travel_between(rb, &body.start, &end);
+    Ok((
+        Moved {
+            end,
+            angvel: rapier3d::prelude::Vector::ZERO,
+            travel: travel.max(body.travel),
+            ..*body
+        },
+        velocity,
+    ))
+}
+
 /// Moves the body to the end of its (cut) motion. `set_position` marks it
 /// modified, so rapier resyncs its colliders and broad-phase boxes at the
 /// next step's start; call [`sync_colliders`] once after all clamps for

@@ -19,6 +19,8 @@ enum ArithmeticDef {
 #[serde(default)]
 pub struct SweepTargets {
     pub fixed: bool,
+    /// Kinematic bodies; also whether fast kinematic bodies push the
+    /// dynamic bodies they would pass (carried from their impact on).
     pub kinematic: bool,
     /// Other dynamic bodies, with their own motion over the step (fast ones
     /// both ways).

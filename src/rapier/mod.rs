@@ -21,10 +21,12 @@
 //! nothing. After a clamp, what it changed is swept again against the cut
 //! motions (see `sweep_all`). A pair already touching at the start is
 //! rapier's contacts' unless it goes deeper than `CcdConfig::sink`
-//! (sampled, see `sweep::touching_pair`). Not done yet: splitting the step
-//! at the first impact (rapier's `max_ccd_substeps > 1`); fast kinematic
-//! bodies are not swept (a fast kinematic paddle passes through resting
-//! dynamic bodies, as with rapier's own CCD).
+//! (sampled, see `sweep::touching_pair`). Fast kinematic bodies (rapier
+//! never sweeps them) push the dynamic bodies they would pass, in time
+//! order: each is carried from its time of impact, ends a skin ahead of its
+//! pusher with the pusher's velocity, and pushes in turn what it meets (see
+//! `push`). Not done yet: splitting the step at the first impact (rapier's
+//! `max_ccd_substeps > 1`).
 
 mod candidates;
 mod clamp;
@@ -208,7 +210,7 @@ impl AffineCcd {
                 &mut self.report,
                 &mut self.moved,
             );
-            if self.moved.iter().any(|m| m.fast) {
+            if self.moved.iter().any(|m| m.fast || m.pusher) {
                 let opts = self.options(&params);
                 let scene = Scene {
                     bodies,
@@ -250,6 +252,9 @@ impl AffineCcd {
         for (i, hit) in &plan.hits {
             let body = &plan.moved[*i];
             clamp::clamp(bodies, body);
+            if let (Some(v), Some(rb)) = (plan.velocity[*i], bodies.get_mut(body.handle)) {
+                rb.set_linvel(v, true);
+            }
             let fraction = plan.scale[*i];
             stops.insert(body.handle, fraction);
             self.report.hits.push(CcdHitEvent {
@@ -313,6 +318,8 @@ struct Plan {
     moved: Vec<Moved>,
     /// Per moved body, the share of its motion it keeps (1: not clamped).
     scale: Vec<f64>,
+    /// Per moved body, the velocity a pusher gave it.
+    velocity: Vec<Option<rapier3d::prelude::Vector>>,
     /// Index into `moved` of each clamped body, and its last impact.
     hits: Vec<(usize, sweep::BodyHit)>,
     sensors: Vec<SensorPair>,
@@ -321,11 +328,33 @@ struct Plan {
 /// Rounds of re-sweeping after clamps (the first sweep included).
 const MAX_ROUNDS: usize = 8;
 
+/// What one body is swept against in a round.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Against {
+    /// Everything (a fast body's first sweep, a rerouted body).
+    All,
+    /// The moving bodies (a clamped body: its timing changed).
+    Moving,
+    /// The bodies changed in the last round.
+    Changed,
+    /// Everything but dynamic bodies and pushers (a carried body).
+    Blockers,
+}
+
 /// Sweeps the fast bodies; then, while some body was clamped, sweeps again
 /// what the clamps changed: a clamped body against the moving bodies (its
 /// timing changed), and every dynamic body near a clamped one against it
 /// (it was solved against the uncut motion). Re-sweeps use half the skin,
 /// so a pair left a skin apart by an earlier clamp does not clamp again.
+///
+/// Fast kinematic bodies ("pushers") are swept against too: rapier never
+/// sweeps them, so a fast paddle passes through resting boxes. A dynamic
+/// body (awake or not, moving or not) that a pusher would pass is
+/// *carried*: from its time of impact on it moves rigidly with the pusher,
+/// ends a skin ahead of it and gets the pusher's velocity at its centre of
+/// mass (an inelastic push; the next step's contacts go on from there).
+/// What a carried body meets on the way is carried in turn; anything else
+/// stops it (it is then squeezed, rapier's contacts' business).
 #[allow(clippy::too_many_arguments)]
 fn sweep_all(
     scene: &Scene,
@@ -341,10 +370,49 @@ fn sweep_all(
     use std::collections::HashSet;
     let dispatcher = narrow_phase.query_dispatcher();
     let mut current = moved.to_vec();
-    let mut scale = vec![1.0; moved.len()];
-    let mut last: Vec<Option<sweep::BodyHit>> = vec![None; moved.len()];
+    let mut dirty: Vec<(usize, Against)> = (0..moved.len())
+        .filter(|&i| moved[i].fast)
+        .map(|i| (i, Against::All))
+        .collect();
+    let mut pushing: HashSet<RigidBodyHandle> = moved
+        .iter()
+        .filter(|m| m.pusher)
+        .map(|m| m.handle)
+        .collect();
+    let pushed = if pushing.is_empty() {
+        Vec::new()
+    } else {
+        push(
+            scene,
+            broad_phase,
+            dispatcher,
+            &mut current,
+            &mut pushing,
+            dt,
+            opts,
+            ws,
+            report,
+        )
+    };
+    let n = current.len();
+    let mut scale = vec![1.0; n];
+    let mut velocity: Vec<Option<rapier3d::prelude::Vector>> = vec![None; n];
+    let mut last: Vec<Option<sweep::BodyHit>> = vec![None; n];
+    let mut carried: HashSet<RigidBodyHandle> = HashSet::new();
+    for (i, hit, v) in pushed {
+        velocity[i] = Some(v);
+        last[i] = Some(hit);
+        carried.insert(current[i].handle);
+    }
+    // A carried body is swept against what can stop it, not against what
+    // carries it or what it carries.
+    dirty.retain(|(i, _)| !carried.contains(&current[*i].handle));
+    for (i, m) in current.iter().enumerate() {
+        if carried.contains(&m.handle) {
+            dirty.push((i, Against::Blockers));
+        }
+    }
     let mut sensors = Vec::new();
-    let mut dirty: Vec<usize> = (0..moved.len()).filter(|&i| moved[i].fast).collect();
     let mut changed_set: HashSet<RigidBodyHandle> = HashSet::new();
     let mut changed: Vec<usize> = Vec::new();
     // Clamped bodies whose cut motion is not part of the old path.
@@ -360,17 +428,15 @@ fn sweep_all(
         let motions = Motions::new(&current, dt);
         ws.motions.clear();
         let mut found = Vec::new();
-        for &i in &dirty {
+        for &(i, against) in &dirty {
             let body = &current[i];
-            let (targets, round_opts) = if round == 0 {
-                (sweep::Targets::All, opts)
-            } else if rerouted.contains(&body.handle) {
-                (sweep::Targets::All, &resweep)
-            } else if changed_set.contains(&body.handle) {
-                (sweep::Targets::Moving, &resweep)
-            } else {
-                (sweep::Targets::Only(&changed_set), &resweep)
+            let targets = match against {
+                Against::All => sweep::Targets::All,
+                Against::Moving => sweep::Targets::Moving,
+                Against::Changed => sweep::Targets::Only(&changed_set),
+                Against::Blockers => sweep::Targets::Blockers(&pushing),
             };
+            let round_opts = if round == 0 { opts } else { &resweep };
             report.bodies_swept += 1;
             let mut body_sensors = Vec::new();
             match sweep::sweep_body(
@@ -396,38 +462,75 @@ fn sweep_all(
                 Err(e) => report.skip(body.handle, SkipReason::Query(e.to_string())),
             }
         }
-        // Cut the motions after all sweeps of the round.
+        // Cut (or carry) the motions after all sweeps of the round.
         changed.clear();
         changed_set.clear();
         rerouted.clear();
+        let before = current.clone();
         for (i, hit) in found {
-            match clamp::truncate(scene.bodies, &current[i], hit.toi.fraction, dt) {
-                Ok((cut, new_path)) => {
-                    if new_path {
-                        rerouted.insert(cut.handle);
+            let by = scene.colliders[hit.collider2]
+                .parent()
+                .filter(|h| pushing.contains(h))
+                .and_then(|h| before.iter().position(|m| m.handle == h));
+            let f = hit.toi.fraction;
+            let handle = current[i].handle;
+            match by {
+                Some(p) => match clamp::carry(scene.bodies, &before[i], &before[p], f, dt) {
+                    Ok((cut, v)) => {
+                        current[i] = cut;
+                        velocity[i] = Some(velocity[p].unwrap_or(v));
+                        carried.insert(handle);
+                        rerouted.insert(handle);
                     }
-                    current[i] = cut;
-                    scale[i] *= hit.toi.fraction;
-                    last[i] = Some(hit);
-                    changed.push(i);
-                    changed_set.insert(cut.handle);
-                }
-                Err(e) => report.skip(current[i].handle, SkipReason::Query(e.to_string())),
+                    Err(e) => {
+                        report.skip(handle, SkipReason::Query(e.to_string()));
+                        continue;
+                    }
+                },
+                None => match clamp::truncate(scene.bodies, &before[i], f, dt) {
+                    Ok((cut, new_path)) => {
+                        if new_path {
+                            rerouted.insert(handle);
+                        }
+                        current[i] = cut;
+                        scale[i] *= f;
+                    }
+                    Err(e) => {
+                        report.skip(handle, SkipReason::Query(e.to_string()));
+                        continue;
+                    }
+                },
             }
+            last[i] = Some(hit);
+            changed.push(i);
+            changed_set.insert(handle);
         }
-        // Next round: the clamped bodies, and the dynamic bodies whose
-        // swept box meets a clamped body's.
+        pushing.extend(carried.iter().copied());
+        // Next round: the changed bodies, and the dynamic bodies whose
+        // swept box meets a changed body's.
         dirty.clear();
-        dirty.extend_from_slice(&changed);
         if changed.is_empty() {
             break;
         }
+        for &i in &changed {
+            let h = current[i].handle;
+            let against = if carried.contains(&h) {
+                Against::Blockers
+            } else if rerouted.contains(&h) {
+                Against::All
+            } else {
+                Against::Moving
+            };
+            dirty.push((i, against));
+        }
         let boxes: Vec<_> = changed
             .iter()
-            .filter_map(|&i| body_box(scene, &moved[i]))
+            .filter_map(|&i| body_box(scene, &current[i]))
             .collect();
         for (j, m) in current.iter().enumerate() {
-            if changed_set.contains(&m.handle) {
+            // A carried body rides with its pusher: what it meets is
+            // carried in turn, it is not stopped by it.
+            if changed_set.contains(&m.handle) || carried.contains(&m.handle) {
                 continue;
             }
             let Some(rb) = scene.bodies.get(m.handle) else {
@@ -439,7 +542,7 @@ fn sweep_all(
             if let Some(b) = body_box(scene, m)
                 && boxes.iter().any(|c| c.intersects(&b))
             {
-                dirty.push(j);
+                dirty.push((j, Against::Changed));
             }
         }
     }
@@ -451,9 +554,187 @@ fn sweep_all(
     Plan {
         moved: current,
         scale,
+        velocity,
         hits,
         sensors,
     }
+}
+
+/// Most bodies one step's pushers carry.
+const MAX_CARRIED: usize = 64;
+
+/// One body a pusher may carry: its index in the moved bodies, its
+/// earliest impact with the front so far.
+struct Cand {
+    i: usize,
+    best: Option<sweep::BodyHit>,
+    /// Swept against the whole front (a candidate found late is).
+    swept: bool,
+    done: bool,
+}
+
+/// The fast kinematic bodies push what they would pass, in time order: the
+/// dynamic bodies whose box meets a pusher's swept box are swept against
+/// the pushers, the earliest impact is carried (`clamp::carry`), the
+/// carried body joins the front (what it meets is carried in turn, the
+/// bodies near its swept box become candidates), and so on. A body
+/// touching the front at the start that the front drives into is carried
+/// from the start. Each candidate is swept once against each front member
+/// (their motions are final once they join). Returns the carried bodies
+/// (index into `current`), their impacts and velocities; `front` ends with
+/// the pushers and the carried bodies.
+#[allow(clippy::too_many_arguments)]
+fn push(
+    scene: &Scene,
+    broad_phase: &BroadPhaseBvh,
+    dispatcher: &dyn rapier3d::parry::query::QueryDispatcher,
+    current: &mut Vec<Moved>,
+    front: &mut std::collections::HashSet<RigidBodyHandle>,
+    dt: f64,
+    opts: &QueryOptions,
+    ws: &mut Workspace,
+    report: &mut CcdReport,
+) -> Vec<(usize, sweep::BodyHit, Vector)> {
+    use std::collections::{HashMap, HashSet};
+    let mut out = Vec::new();
+    let mut cands: Vec<Cand> = Vec::new();
+    let mut seen: HashSet<RigidBodyHandle> = front.clone();
+    let mut fresh: HashSet<RigidBodyHandle> = front.clone();
+    let mut velocities: HashMap<RigidBodyHandle, Vector> = HashMap::new();
+    let reach = 2.0 * opts.skin + 1.0e-4;
+    let mut near = |current: &mut Vec<Moved>,
+                    b: rapier3d::parry::bounding_volume::Aabb,
+                    cands: &mut Vec<Cand>| {
+        let query = broad_phase.as_query_pipeline(
+            dispatcher,
+            scene.bodies,
+            scene.colliders,
+            rapier3d::prelude::QueryFilter::default(),
+        );
+        for (_, co) in query.intersect_aabb_conservative(b) {
+            let Some(h) = co.parent() else { continue };
+            if !seen.insert(h) {
+                continue;
+            }
+            let Some(rb) = scene.bodies.get(h) else {
+                continue;
+            };
+            if !rb.is_dynamic() || !rb.is_enabled() || scene.config.opted_out(rb.user_data) {
+                continue;
+            }
+            let i = match current.iter().position(|m| m.handle == h) {
+                Some(i) => i,
+                None => {
+                    current.push(Moved {
+                        handle: h,
+                        start: *rb.position(),
+                        end: *rb.position(),
+                        angvel: Vector::ZERO,
+                        fast: false,
+                        pusher: false,
+                        travel: 0.0,
+                    });
+                    current.len() - 1
+                }
+            };
+            cands.push(Cand {
+                i,
+                best: None,
+                swept: false,
+                done: false,
+            });
+        }
+    };
+    let boxes: Vec<_> = current
+        .iter()
+        .filter(|m| m.pusher)
+        .filter_map(|m| body_box(scene, m))
+        .collect();
+    for b in boxes {
+        near(current, b, &mut cands);
+    }
+    while out.len() < MAX_CARRIED {
+        {
+            let motions = Motions::new(current, dt);
+            ws.motions.clear();
+            for c in cands.iter_mut().filter(|c| !c.done) {
+                let set = if c.swept { &fresh } else { &*front };
+                c.swept = true;
+                if set.is_empty() {
+                    continue;
+                }
+                let body = &current[c.i];
+                let touching = set.iter().find_map(|h| {
+                    let p = motions.body(*h)?;
+                    sweep::pushed_at_start(scene, body, p, reach, scene.config.sink)
+                });
+                let hit = match touching {
+                    Some(hit) => Some(hit),
+                    None => {
+                        report.bodies_swept += 1;
+                        match sweep::sweep_body(
+                            scene,
+                            broad_phase,
+                            dispatcher,
+                            &motions,
+                            body,
+                            sweep::Targets::Only(set),
+                            opts,
+                            ws,
+                            report,
+                            &mut Vec::new(),
+                        ) {
+                            Ok(hit) => hit.filter(|h| h.toi.fraction < 1.0),
+                            Err(e) => {
+                                report.skip(body.handle, SkipReason::Query(e.to_string()));
+                                None
+                            }
+                        }
+                    }
+                };
+                if let Some(hit) = hit
+                    && c.best.is_none_or(|b| hit.toi.fraction < b.toi.fraction)
+                {
+                    c.best = Some(hit);
+                }
+            }
+        }
+        fresh.clear();
+        let Some(k) = (0..cands.len())
+            .filter(|&k| !cands[k].done && cands[k].best.is_some())
+            .min_by(|&a, &b| {
+                let fa = cands[a].best.map_or(1.0, |h| h.toi.fraction);
+                let fb = cands[b].best.map_or(1.0, |h| h.toi.fraction);
+                fa.total_cmp(&fb)
+            })
+        else {
+            break;
+        };
+        cands[k].done = true;
+        let (i, hit) = (cands[k].i, cands[k].best.expect("filtered"));
+        let Some(by) = scene.colliders[hit.collider2].parent() else {
+            continue;
+        };
+        let Some(p) = current.iter().position(|m| m.handle == by) else {
+            continue;
+        };
+        match clamp::carry(scene.bodies, &current[i], &current[p], hit.toi.fraction, dt) {
+            Ok((cut, v)) => {
+                let v = velocities.get(&by).copied().unwrap_or(v);
+                let h = cut.handle;
+                current[i] = cut;
+                velocities.insert(h, v);
+                front.insert(h);
+                fresh.insert(h);
+                out.push((i, hit, v));
+                if let Some(b) = body_box(scene, &current[i]) {
+                    near(current, b, &mut cands);
+                }
+            }
+            Err(e) => report.skip(current[i].handle, SkipReason::Query(e.to_string())),
+        }
+    }
+    out
 }
 
 /// A box holding the body's colliders over its whole (uncut) motion: their

@@ -31,6 +31,9 @@ pub(crate) struct Moved {
     pub angvel: Vector,
     /// A dynamic body, not opted out, fast enough to tunnel.
     pub fast: bool,
+    /// A kinematic body fast enough to pass through dynamic bodies (by the
+    /// same test): they are swept against it and pushed.
+    pub pusher: bool,
     /// Bound on how far any point of the body travels during the step,
     /// metres (for enlarging broad-phase queries).
     pub travel: f64,
@@ -138,18 +141,28 @@ pub(crate) fn moved(
         // Arc length of the farthest point; the velocity term is rapier's.
         let arc = shift + extent * short.max(spin);
         let by_velocity = (rb.linvel().length() as f64 + rb.angvel().length() as f64 * extent) * dt;
-        let fast = rb.is_dynamic()
-            && !config.opted_out(rb.user_data)
-            && arc.max(by_velocity) > config.fast_factor * body_thickness(rb, colliders);
+        let tunnels = arc.max(by_velocity) > config.fast_factor * body_thickness(rb, colliders);
+        let fast = rb.is_dynamic() && !config.opted_out(rb.user_data) && tunnels;
+        let pusher = rb.is_kinematic() && config.targets.kinematic && tunnels;
         out.push(Moved {
             handle: start.handle,
             start: start.pose,
             end,
             angvel: turn_hint(rb, &start.pose, &end, dt),
             fast,
+            pusher,
             travel,
         });
     }
+}
+
+/// Bound on how far any point of `rb` moves on the shortest motion from
+/// `start` to `end`, metres (the `travel` of a motion rebuilt by the stage).
+pub(crate) fn travel_between(rb: &RigidBody, start: &Pose, end: &Pose) -> f64 {
+    let com = rb.local_center_of_mass();
+    let shift = (*end * com - *start * com).length() as f64;
+    let extent = rb.mass_properties().max_extent() as f64;
+    (shift + extent * angle_short(start, end).min(2.0)) * (1.0 + 1.0e-4) + 1.0e-6
 }
 
 /// How far from a free spin (radians) the end orientation may be for the

@@ -2,7 +2,7 @@
 //! crosses before it. Every call to the time-of-impact query is in
 //! [`earliest`] and [`first_crossing`].
 
-use super::candidates::{Candidate, Motions, PairKind, Scene, gather, swept_aabb};
+use super::candidates::{Candidate, Motions, PairKind, Scene, gather, pair_kind, swept_aabb};
 use super::convert::pose_from_iso;
 use super::query::{QueryOptions, ShapeMotion, Toi, time_of_impact, time_of_impact_many};
 use super::report::CcdReport;
@@ -43,8 +43,13 @@ pub(crate) enum Targets<'a> {
     /// own motion was cut short: against fixed targets it only covers part
     /// of the path already cleared, against moving ones its timing changed).
     Moving,
-    /// Only colliders of these bodies (whose motion was cut short).
+    /// Only colliders of these bodies (whose motion was cut short, or
+    /// fast kinematic bodies and what they carry).
     Only(&'a HashSet<RigidBodyHandle>),
+    /// Everything but dynamic bodies and these (a body carried by a
+    /// kinematic one: what it meets on the way is pushed in turn, the
+    /// pushers carry it, only the rest stops it).
+    Blockers(&'a HashSet<RigidBodyHandle>),
 }
 
 /// Reused buffers; `motions` caches target motions for one step (clear it
@@ -320,6 +325,9 @@ pub(crate) fn sweep_body(
                 Targets::All => true,
                 Targets::Moving => parent.is_some_and(|b| motions.body(b).is_some()),
                 Targets::Only(set) => parent.is_some_and(|b| set.contains(&b)),
+                Targets::Blockers(set) => !parent.is_some_and(|b| {
+                    set.contains(&b) || scene.bodies.get(b).is_some_and(|rb| rb.is_dynamic())
+                }),
             };
             if !wanted {
                 continue;
@@ -363,4 +371,74 @@ pub(crate) fn sweep_body(
         }
     }
     Ok(best)
+}
+
+/// A contact at the start of the step between `body` and `pusher` (a fast
+/// kinematic body, or a body it carries) that the pusher's motion drives
+/// into the body by more than `sink` over the step: the body is pushed from
+/// the start. `reach`: how far apart counts as touching.
+pub(crate) fn pushed_at_start(
+    scene: &Scene,
+    body: &Moved,
+    pusher: &Moved,
+    reach: f64,
+    sink: f64,
+) -> Option<BodyHit> {
+    let rb = scene.bodies.get(body.handle)?;
+    let pb = scene.bodies.get(pusher.handle)?;
+    for &h1 in rb.colliders() {
+        let Some(co1) = scene.colliders.get(h1).filter(|c| c.is_enabled()) else {
+            continue;
+        };
+        let Some(local1) = co1.position_wrt_parent() else {
+            continue;
+        };
+        for &h2 in pb.colliders() {
+            let Some(co2) = scene.colliders.get(h2) else {
+                continue;
+            };
+            if !matches!(pair_kind(scene, h1, co1, h2, co2), Some(PairKind::Solid)) {
+                continue;
+            }
+            let Some(local2) = co2.position_wrt_parent() else {
+                continue;
+            };
+            let p1 = body.start * *local1;
+            let p2 = pusher.start * *local2;
+            let Ok(Some(c)) =
+                rapier3d::parry::query::contact(&p2, co2.shape(), &p1, co1.shape(), reach as f32)
+            else {
+                continue;
+            };
+            if c.dist as f64 > reach {
+                continue;
+            }
+            let w = c.point1;
+            let moved = pusher.end * pusher.start.inverse_transform_point(w);
+            let drive = (moved - w).dot(c.normal1) as f64;
+            if drive > sink {
+                let point = |p: rapier3d::prelude::Vector| {
+                    nalgebra::Point3::new(p.x as f64, p.y as f64, p.z as f64)
+                };
+                return Some(BodyHit {
+                    toi: Toi {
+                        fraction: 0.0,
+                        time: 0.0,
+                        status: RootStatus::InitiallyTouching,
+                        witness1: point(c.point2),
+                        witness2: point(c.point1),
+                        normal1: nalgebra::Vector3::new(
+                            -c.normal1.x as f64,
+                            -c.normal1.y as f64,
+                            -c.normal1.z as f64,
+                        ),
+                        stats: Default::default(),
+                    },
+                    collider1: h1,
+                    collider2: h2,
+                });
+            }
+        }
+    }
+    None
 }
