@@ -30,3 +30,8 @@ pub use query::{ManyToi, QueryOptions, ShapeMotion, Toi, time_of_impact, time_of
 pub use solve::{
     GapSet, InitialContact, RootStatus, SolveOptions, SolveOutcome, SolveStats, Solver, solve_in,
 };
+
+/// The README's examples, compiled and run as doc tests.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+pub struct ReadmeDoctests;
