@@ -24,11 +24,11 @@
 //!   within half an ulp of the truth, so one ulp outward always contains it.
 //! - [`Affine`] and [`Taylor`] compute their coefficients rounded to nearest
 //!   and add a bound on each rounding error to their error term `r`
-//!   ([`rounding::err`], `2⁻⁵²·|x| + 2⁻¹⁰⁷⁴` per rounded result), summing
+//!   (`rounding::err`: `2⁻⁵²·|x| + 2⁻¹⁰⁷⁴` per rounded result), summing
 //!   those bounds with upward rounding. Cheaper than outward intervals per
 //!   coefficient and just as sound.
 //! - libm's `sin` and `cos` are not correctly rounded (glibc stays within one
-//!   ulp); their results are widened by [`rounding::LIBM_SLACK`], eight ulps
+//!   ulp); their results are widened by `rounding::LIBM_SLACK`, eight ulps
 //!   of 1, see there.
 //!
 //! NaN never escapes as a bound: an operation whose bound would be NaN gives

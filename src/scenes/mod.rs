@@ -3,7 +3,7 @@
 //!
 //! A [`Scene`] is a plain description: a name, a time step, a number of steps,
 //! the effects it exercises, and a builder that fills a rapier
-//! [`PhysicsWorld`](rapier3d::prelude::PhysicsWorld) with bodies and colliders.
+//! `PhysicsWorld` with bodies and colliders.
 //! The builder returns a [`Setup`]: the guards (which body must stay on which
 //! side of which obstacle) and the scripts that drive kinematic bodies.
 //!
@@ -16,8 +16,8 @@
 //!   poses; a contact that only exists between the poses is a "missed
 //!   contact", a step that starts shallow and ends deep is a "deep end".
 //!
-//! [`runner`] steps a scene under a [`Backend`](runner::Backend) and returns a
-//! [`SceneReport`](runner::SceneReport); [`svg`] draws a run.
+//! [`runner`] steps a scene under a [`Backend`] and returns a
+//! [`SceneReport`]; [`svg`] draws a run.
 //!
 //! Units: metres, seconds, radians, radians per second.
 
