@@ -13,6 +13,7 @@
 //! | ball–ball | squared centre distance | `ball_ball.rs` |
 //! | ball–cuboid, ball–round cuboid | exact clamped distance in the box frame + 3 face slabs | `ball_cuboid.rs` |
 //! | cuboid–cuboid, zero skin | the 15 separating axes | `cuboid_cuboid.rs` |
+//! | cuboid–triangle, zero skin | the 13 separating axes | `cuboid_triangle.rs` |
 //! | ball–triangle | vertex–face axes, radius as skin | `ball_triangle.rs` |
 //! | ball–segment | end planes + adaptive direction | `ball_segment.rs` |
 //! | triangle–triangle | face normals, edge crosses, adaptive | `triangle_triangle.rs` |
@@ -31,6 +32,7 @@ mod ball_segment;
 mod ball_triangle;
 pub(crate) mod composite;
 mod cuboid_cuboid;
+mod cuboid_triangle;
 mod halfspace;
 pub(crate) mod primitives;
 mod support;
@@ -42,6 +44,7 @@ pub(crate) use ball_cuboid::BallCuboid;
 pub(crate) use ball_segment::BallSegment;
 pub(crate) use ball_triangle::BallTriangle;
 pub(crate) use cuboid_cuboid::CuboidCuboid;
+pub(crate) use cuboid_triangle::CuboidTriangle;
 pub(crate) use halfspace::HalfSpaceConvex;
 pub(crate) use support::{Convex, Core};
 pub(crate) use support_map::SupportMap;
@@ -75,6 +78,7 @@ pub(crate) enum PairGap {
     TriangleTriangle(TriangleTriangle),
     BallCuboid(BallCuboid),
     CuboidCuboid(CuboidCuboid),
+    CuboidTriangle(CuboidTriangle),
     HalfSpace(HalfSpaceConvex),
     SupportMap(SupportMap),
 }
@@ -89,6 +93,7 @@ impl PairGap {
             PairGap::TriangleTriangle(_) => TriangleTriangle::AXES,
             PairGap::BallCuboid(_) => BallCuboid::AXES,
             PairGap::CuboidCuboid(_) => CuboidCuboid::AXES,
+            PairGap::CuboidTriangle(_) => CuboidTriangle::AXES,
             PairGap::HalfSpace(_) => HalfSpaceConvex::AXES,
             PairGap::SupportMap(_) => SupportMap::AXES,
         }
@@ -103,6 +108,7 @@ impl PairGap {
             PairGap::BallBall(_)
                 | PairGap::BallCuboid(_)
                 | PairGap::CuboidCuboid(_)
+                | PairGap::CuboidTriangle(_)
                 | PairGap::HalfSpace(_)
         )
     }
@@ -131,6 +137,7 @@ impl PairGap {
             PairGap::TriangleTriangle(g) => g.eval(span, a, b, axes, out),
             PairGap::BallCuboid(g) => g.eval(span, a, b, axes, out),
             PairGap::CuboidCuboid(g) => g.eval(span, a, b, axes, out),
+            PairGap::CuboidTriangle(g) => g.eval(span, a, b, axes, out),
             PairGap::HalfSpace(g) => g.eval(span, a, b, axes, out),
             PairGap::SupportMap(g) => g.eval(span, a, b, axes, out),
         }
@@ -193,6 +200,16 @@ pub(crate) fn build(shape1: &dyn Shape, shape2: &dyn Shape, skin: f64) -> Result
                     straight(PairGap::CuboidCuboid(CuboidCuboid::new(
                         *h1, c1.border, *h2, c2.border, skin,
                     )))
+                }
+                (Core::Cuboid(h), Core::Triangle(t))
+                    if skin == 0.0 && c1.border == 0.0 && c2.border == 0.0 =>
+                {
+                    straight(PairGap::CuboidTriangle(CuboidTriangle::new(*h, *t)))
+                }
+                (Core::Triangle(t), Core::Cuboid(h))
+                    if skin == 0.0 && c1.border == 0.0 && c2.border == 0.0 =>
+                {
+                    mirrored(PairGap::CuboidTriangle(CuboidTriangle::new(*h, *t)))
                 }
                 _ => straight(PairGap::SupportMap(SupportMap::new(
                     c1, shape1, c2, shape2, skin,

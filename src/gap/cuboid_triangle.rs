@@ -1,0 +1,97 @@
+//! Cuboid against triangle: the 13 separating axes (zero skin, no border).
+//!
+//! Everything is seen from the box's frame, where the triangle's corners are
+//! `v_i = R·c_i + t` (`R`, `t` the triangle's pose relative to the box). For
+//! an axis `L` the shapes are apart when the triangle's projection
+//! `[min_i L·v_i, max_i L·v_i]` and the box's `[−r, r]`, `r = Σ_k h_k·|L_k|`,
+//! do not meet. The axes: the box's 3 face normals, the triangle's normal
+//! `n = (v1 − v0) × (v2 − v0)` and the 9 crosses `e_k × (v_{j+1} − v_j)`, all
+//! unnormalised (DESIGN.md §4): near-parallel edges give `L ≈ 0`, never a
+//! false separation. This set is complete for touching, so with zero skin
+//! every axis `≤ 0` means the shapes touch: the family is exact. With a skin
+//! or a border, corners would count as close early (as for two boxes), so
+//! those pairs use the adaptive family.
+
+use super::Side;
+use super::support::ORTHO_SLACK;
+use crate::enclosure::rounding::up;
+use crate::enclosure::{Enclosure, TimeSpan};
+use nalgebra::Vector3;
+
+#[derive(Clone, Debug)]
+pub(crate) struct CuboidTriangle {
+    half: Vector3<f64>,
+    corners: [Vector3<f64>; 3],
+    /// The orthonormality pad (the start rotation matrices are orthonormal
+    /// to about 1e-15), metres: added to every projection gap.
+    pad: f64,
+    /// `pad·|L|` needs `|L|`: bounded by the lengths of the triangle's
+    /// edges (`|e_k × f| ≤ |f|`) and its doubled area, taken from the
+    /// triangle's own coordinates (rotation keeps them), rounded up.
+    edge_len: [f64; 3],
+    normal_len: f64,
+}
+
+impl CuboidTriangle {
+    pub const AXES: usize = 13;
+
+    pub fn new(half: Vector3<f64>, corners: [Vector3<f64>; 3]) -> CuboidTriangle {
+        let reach = half.norm() + corners.iter().map(|c| c.norm()).fold(0.0, f64::max);
+        let edge_len =
+            [0, 1, 2].map(|j| up(up((corners[(j + 1) % 3] - corners[j]).norm()) * (1.0 + 1e-12)));
+        let normal = (corners[1] - corners[0]).cross(&(corners[2] - corners[0]));
+        CuboidTriangle {
+            half,
+            corners,
+            pad: up(ORTHO_SLACK * up(reach + 1.0)),
+            edge_len,
+            normal_len: up(up(normal.norm()) * (1.0 + 1e-12)),
+        }
+    }
+
+    /// `a` is the cuboid, `b` the triangle.
+    pub fn eval<E: Enclosure>(
+        &self,
+        _span: TimeSpan,
+        a: &Side<E>,
+        b: &Side<E>,
+        axes: u64,
+        out: &mut [E],
+    ) {
+        let rel = a.pose.relative(b.pose);
+        let v = self.corners.map(|c| rel.transform_point(&c));
+        let h = &self.half;
+        // The gap along L given the corners' projections and the box's reach.
+        let gap = |p: [E; 3], reach: E, pad: f64| {
+            let lo = p[0].min(p[1]).min(p[2]);
+            let hi = p[0].max(p[1]).max(p[2]);
+            (lo - reach).max(-hi - reach) - pad
+        };
+        for k in 0..3 {
+            if axes >> k & 1 != 0 {
+                out[k] = gap([v[0][k], v[1][k], v[2][k]], E::constant(h[k]), self.pad);
+            }
+        }
+        let f = [v[1] - v[0], v[2] - v[1], v[0] - v[2]];
+        if axes >> 3 & 1 != 0 {
+            let n = (v[1] - v[0]).cross(&(v[2] - v[0]));
+            let reach = n.x.abs() * h.x + n.y.abs() * h.y + n.z.abs() * h.z;
+            let d = n.dot(&v[0]);
+            out[3] = d.abs() - reach - up(self.pad * self.normal_len);
+        }
+        for k in 0..3 {
+            let (k1, k2) = ((k + 1) % 3, (k + 2) % 3);
+            for (j, fj) in f.iter().enumerate() {
+                let axis = 4 + 3 * k + j;
+                if axes >> axis & 1 == 0 {
+                    continue;
+                }
+                // L = e_k × f_j: component k is 0, k1 is −f[k2], k2 is f[k1].
+                let (l1, l2) = (-fj[k2], fj[k1]);
+                let p = v.map(|vi| l1 * vi[k1] + l2 * vi[k2]);
+                let reach = l1.abs() * h[k1] + l2.abs() * h[k2];
+                out[axis] = gap(p, reach, up(self.pad * self.edge_len[j]));
+            }
+        }
+    }
+}
