@@ -119,6 +119,10 @@ fn soak(bodies: usize, steps: usize, seed: u64) {
     }
     let (mut clamps, mut skipped) = (0, 0);
     for step in 0..steps {
+        if step % 1000 == 0 && step > 0 {
+            // Progress for the long run (shown with --nocapture).
+            println!("step {step}: {clamps} clamps, {skipped} skipped body-steps so far");
+        }
         let report = ccd.step(&mut world);
         clamps += report.clamps();
         skipped += report.skipped.len();
