@@ -325,6 +325,28 @@ impl Solver {
         })
     }
 
+    /// If `pair` is composite, queue its sub-pairs that may touch on
+    /// `span` (all their axes alive) and return `true`.
+    fn expand_into_pending<E: Enclosure, G: GapSet<E>>(
+        &mut self,
+        gaps: &mut G,
+        pair: usize,
+        span: TimeSpan,
+    ) -> bool {
+        self.children.clear();
+        if !gaps.expand(pair, span, &mut self.children) {
+            return false;
+        }
+        for &child in &self.children {
+            let n = gaps.axis_count(child as usize).min(MAX_AXES);
+            self.pending.push(Alive {
+                pair: child,
+                axes: full_mask(n),
+            });
+        }
+        true
+    }
+
     /// Push `[span.lo, cut]` and `[cut, span.hi]` so that the earlier one
     /// is searched first; both keep the alive pairs `arena[start..end]`.
     fn push_halves(&mut self, span: TimeSpan, cut: f64, start: usize, end: usize) {
@@ -387,15 +409,7 @@ impl Solver {
             if (0..MAX_AXES).any(|k| item.axes >> k & 1 == 1 && out[k].range().lo > 0.0) {
                 continue;
             }
-            self.children.clear();
-            if gaps.expand(pair, span, &mut self.children) {
-                for &child in &self.children {
-                    let n = gaps.axis_count(child as usize).min(MAX_AXES);
-                    self.pending.push(Alive {
-                        pair: child,
-                        axes: full_mask(n),
-                    });
-                }
+            if self.expand_into_pending(gaps, pair, span) {
                 continue;
             }
             self.ignored.push(item.pair);
@@ -459,15 +473,7 @@ impl Solver {
                 item.axes
             };
             let (lo, hi) = (judged.lo, judged.hi);
-            self.children.clear();
-            if gaps.expand(pair, span, &mut self.children) {
-                for &child in &self.children {
-                    let n = gaps.axis_count(child as usize).min(MAX_AXES);
-                    self.pending.push(Alive {
-                        pair: child,
-                        axes: full_mask(n),
-                    });
-                }
+            if self.expand_into_pending(gaps, pair, span) {
                 continue;
             }
             if lo > hi {
