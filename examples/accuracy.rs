@@ -107,15 +107,7 @@ fn main() {
                 ..QueryOptions::default()
             };
             for case in &cases {
-                let start = Instant::now();
-                let got = time_of_impact(
-                    case.shape1.as_ref(),
-                    &case.motion1,
-                    case.shape2.as_ref(),
-                    &case.motion2,
-                    &options,
-                );
-                let micros = start.elapsed().as_secs_f64() * 1e6;
+                let (got, micros) = timed_query(case, &options);
                 let got = got.expect("supported cases only");
                 row.record(
                     case,
@@ -196,6 +188,22 @@ fn main() {
     eprintln!("wrote docs/accuracy.md and docs/accuracy.svg");
 }
 
+/// One affine-ccd query on `case`, and the microseconds it took.
+fn timed_query(
+    case: &Case,
+    options: &QueryOptions,
+) -> (Result<Option<affine_ccd::Toi>, affine_ccd::CcdError>, f64) {
+    let start = Instant::now();
+    let got = time_of_impact(
+        case.shape1.as_ref(),
+        &case.motion1,
+        case.shape2.as_ref(),
+        &case.motion2,
+        options,
+    );
+    (got, start.elapsed().as_secs_f64() * 1e6)
+}
+
 /// One markdown row: affine at ε = 1e-4 and parry's two methods on the
 /// cases of one pair kind.
 fn kind_summary(name: &str, cases: &[Case]) -> String {
@@ -204,16 +212,8 @@ fn kind_summary(name: &str, cases: &[Case]) -> String {
     let mut nonlinear = Row::new("parry nonlinear".into(), None);
     let mut sweep = Row::new("parry sweep".into(), None);
     for case in cases {
-        let start = Instant::now();
-        let got = time_of_impact(
-            case.shape1.as_ref(),
-            &case.motion1,
-            case.shape2.as_ref(),
-            &case.motion2,
-            &options,
-        )
-        .expect("supported cases only");
-        let micros = start.elapsed().as_secs_f64() * 1e6;
+        let (got, micros) = timed_query(case, &options);
+        let got = got.expect("supported cases only");
         ours.record(
             case,
             got.map(|t| t.fraction),

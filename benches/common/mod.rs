@@ -6,7 +6,7 @@
 use affine_ccd::convert::{glam_from_vec, pose_from_iso};
 use affine_ccd::truth::{self, Truth};
 use affine_ccd::{Motion, Trajectory, query};
-use nalgebra::{Isometry3, Point3, Quaternion, Translation3, UnitQuaternion, Vector3};
+use nalgebra::{Isometry3, Point3, Translation3, Vector3};
 use rapier3d::parry::math::Vector;
 use rapier3d::parry::query::{
     NonlinearRigidMotion, cast_shapes_nonlinear,
@@ -23,40 +23,10 @@ pub const SWEEP_SLOP: f32 = 0.002;
 /// Ground-truth samples per case.
 pub const TRUTH_SAMPLES: usize = 2048;
 
-/// SplitMix64, seeded.
-pub struct Rng(u64);
-
-impl Rng {
-    pub fn new(seed: u64) -> Rng {
-        Rng(seed)
-    }
-    pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-    pub fn range(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * ((self.next_u64() >> 11) as f64 / (1u64 << 53) as f64)
-    }
-    pub fn vector(&mut self, r: f64) -> Vector3<f64> {
-        Vector3::new(self.range(-r, r), self.range(-r, r), self.range(-r, r))
-    }
-    pub fn rotation(&mut self) -> UnitQuaternion<f64> {
-        loop {
-            let q = Quaternion::new(
-                self.range(-1.0, 1.0),
-                self.range(-1.0, 1.0),
-                self.range(-1.0, 1.0),
-                self.range(-1.0, 1.0),
-            );
-            if (0.1..=1.0).contains(&q.norm()) {
-                return UnitQuaternion::new_normalize(q);
-            }
-        }
-    }
-}
+/// The tests' seeded generator (one copy for tests, benches and examples).
+#[path = "../../tests/common/mod.rs"]
+mod test_common;
+pub use test_common::Rng;
 
 /// A pair kind of the benchmark: a name and how to make its two shapes.
 pub struct PairKind {
