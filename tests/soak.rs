@@ -153,5 +153,17 @@ fn a_short_soak_keeps_every_body_in_the_box() {
 #[test]
 #[ignore = "takes minutes: run by hand and report"]
 fn a_long_soak_keeps_every_body_in_the_box() {
-    soak(300, 10_000, 2);
+    // SOAK_BODIES / SOAK_STEPS / SOAK_SEED override the run (for bisecting a
+    // failure on a shorter run).
+    let env = |name: &str, default: u64| {
+        std::env::var(name)
+            .ok()
+            .and_then(|v| v.parse().ok())
+            .unwrap_or(default)
+    };
+    soak(
+        env("SOAK_BODIES", 300) as usize,
+        env("SOAK_STEPS", 10_000) as usize,
+        env("SOAK_SEED", 2),
+    );
 }
