@@ -55,13 +55,20 @@ impl<'a> Motions<'a> {
             co.position_wrt_parent(),
             co.parent().and_then(|h| bodies.get(h)),
         ) {
-            (Some(m), Some(local), Some(rb)) => Motion::from_poses(
-                iso_from_pose(&(m.start * *local)),
-                iso_from_pose(&(m.end * *local)),
-                point_from_glam(local.inverse_transform_point(rb.local_center_of_mass())),
-                self.dt,
-                super::convert::vec_from_glam(m.angvel),
-            ),
+            (Some(m), Some(local), Some(rb)) => {
+                let motion = Motion::from_poses(
+                    iso_from_pose(&(m.start * *local)),
+                    iso_from_pose(&(m.end * *local)),
+                    point_from_glam(local.inverse_transform_point(rb.local_center_of_mass())),
+                    self.dt,
+                    super::convert::vec_from_glam(m.angvel),
+                )?;
+                if m.accel == rapier3d::prelude::Vector::ZERO {
+                    Ok(motion)
+                } else {
+                    motion.with_acceleration(super::convert::vec_from_glam(m.accel))
+                }
+            }
             _ => Motion::fixed(iso_from_pose(co.position())),
         }
     }

@@ -55,6 +55,7 @@ pub(crate) fn truncate(
         Moved {
             end: pose,
             angvel: hint,
+            accel: rapier3d::prelude::Vector::ZERO,
             ..*body
         },
         rerouted,
@@ -108,6 +109,7 @@ pub(crate) fn carry(
         Moved {
             end,
             angvel: rapier3d::prelude::Vector::ZERO,
+            accel: rapier3d::prelude::Vector::ZERO,
             travel: travel.max(body.travel),
             ..*body
         },

@@ -64,6 +64,14 @@ pub struct CcdConfig {
     /// of its thinnest extent in the step (rapier uses 0.5).
     pub fast_factor: f64,
     pub targets: SweepTargets,
+    /// Solver pieces per step at most. 1 (the default): rapier solves the
+    /// whole step and the stage clamps fast bodies at their impact (they
+    /// wait there for the next step's contacts). More: the step is cut at
+    /// the earliest impact predicted from velocities, forces and gravity,
+    /// and each piece is solved and clamped in turn, so a body that hits
+    /// early in the step bounces within it (rapier's `max_ccd_substeps`).
+    /// Pieces are never shorter than rapier's `min_ccd_dt`.
+    pub substeps: u32,
     /// Per-body opt-out: a dynamic body whose `RigidBody::user_data` has
     /// this bit (0–127) set is never swept or clamped (it still serves as
     /// a target). `None`: no opt-out. A bit, not a handle set, so the choice
@@ -81,6 +89,7 @@ impl Default for CcdConfig {
             max_evaluations: 100_000,
             fast_factor: 0.5,
             targets: SweepTargets::default(),
+            substeps: 1,
             opt_out_bit: None,
         }
     }

@@ -25,8 +25,9 @@
 //! never sweeps them) push the dynamic bodies they would pass, in time
 //! order: each is carried from its time of impact, ends a skin ahead of its
 //! pusher with the pusher's velocity, and pushes in turn what it meets (see
-//! `push`). Not done yet: splitting the step at the first impact (rapier's
-//! `max_ccd_substeps > 1`).
+//! `push`). With `CcdConfig::substeps` > 1 the step is first cut at the
+//! earliest impact predicted from velocities, forces and gravity, and each
+//! piece is stepped and swept as above (see `substep`).
 
 mod candidates;
 mod clamp;
@@ -35,6 +36,7 @@ pub mod dispatcher;
 mod push;
 pub mod report;
 mod select;
+mod substep;
 mod sweep;
 
 use crate::{convert, query};
@@ -64,6 +66,8 @@ pub struct AffineCcd {
     starts: Vec<Start>,
     moved: Vec<Moved>,
     workspace: Workspace,
+    /// Position-based kinematic targets of a step cut into pieces.
+    aims: Vec<substep::Aim>,
     /// Handed to rapier's step, which wants one; unused with
     /// `max_ccd_substeps = 0`.
     unused_ccd: CCDSolver,
@@ -155,7 +159,8 @@ impl AffineCcd {
     }
 
     /// What `PhysicsPipeline::step` takes, minus the `CCDSolver`. Rapier's
-    /// CCD is off for this step whatever `max_ccd_substeps` says.
+    /// CCD is off for this step whatever `max_ccd_substeps` says; the
+    /// stage's own pieces are `CcdConfig::substeps`.
     #[allow(clippy::too_many_arguments)]
     pub fn step_pipeline(
         &mut self,
@@ -173,16 +178,123 @@ impl AffineCcd {
         hooks: &dyn PhysicsHooks,
         events: &dyn EventHandler,
     ) -> &CcdReport {
+        let mut params = *integration_parameters;
+        params.max_ccd_substeps = 0;
+        let dt = params.dt;
+        if self.config.substeps <= 1 || dt <= 0.0 {
+            self.report = CcdReport::default();
+            self.step_piece(
+                pipeline,
+                gravity,
+                &params,
+                islands,
+                broad_phase,
+                narrow_phase,
+                bodies,
+                colliders,
+                impulse_joints,
+                multibody_joints,
+                soft_bodies,
+                hooks,
+                events,
+            );
+            return &self.report;
+        }
+        let mut total = CcdReport::default();
+        substep::record_aims(bodies, &mut self.aims);
+        let (mut remaining, mut left) = (dt, self.config.substeps);
+        while left > 0 {
+            // Predict over the rest of the step; the piece ends at the first
+            // impact.
+            let clock = Instant::now();
+            let opts = self.options(&params);
+            let mut predicted = std::mem::take(&mut self.moved);
+            let impact = if left > 1 {
+                let scene = Scene {
+                    bodies,
+                    colliders,
+                    joints: impulse_joints,
+                    hooks,
+                    config: &self.config,
+                };
+                substep::predict(
+                    &scene,
+                    gravity,
+                    &self.aims,
+                    remaining as f64,
+                    &mut predicted,
+                );
+                substep::first_impact(
+                    &scene,
+                    broad_phase,
+                    narrow_phase,
+                    &predicted,
+                    remaining as f64,
+                    &opts,
+                    &mut self.workspace,
+                    &mut total,
+                )
+            } else {
+                None
+            };
+            self.moved = predicted;
+            let (length, after) = substep::piece(remaining, left, impact, params.min_ccd_dt);
+            let done = dt - remaining;
+            substep::aim(bodies, &self.aims, (done + length) / dt);
+            total.elapsed += clock.elapsed();
+
+            let mut piece = params;
+            piece.dt = length;
+            self.report = CcdReport::default();
+            self.step_piece(
+                pipeline,
+                gravity,
+                &piece,
+                islands,
+                broad_phase,
+                narrow_phase,
+                bodies,
+                colliders,
+                impulse_joints,
+                multibody_joints,
+                soft_bodies,
+                hooks,
+                events,
+            );
+            total.absorb(&self.report, done as f64, dt as f64);
+            remaining -= length;
+            left = after;
+        }
+        self.report = total;
+        &self.report
+    }
+
+    /// One rapier step of `params.dt` and the sweeps and clamps after it,
+    /// accounted in `self.report`.
+    #[allow(clippy::too_many_arguments)]
+    fn step_piece(
+        &mut self,
+        pipeline: &mut PhysicsPipeline,
+        gravity: Vector,
+        params: &IntegrationParameters,
+        islands: &mut IslandManager,
+        broad_phase: &mut BroadPhaseBvh,
+        narrow_phase: &mut NarrowPhase,
+        bodies: &mut RigidBodySet,
+        colliders: &mut ColliderSet,
+        impulse_joints: &mut ImpulseJointSet,
+        multibody_joints: &mut MultibodyJointSet,
+        soft_bodies: &mut SoftBodySet,
+        hooks: &dyn PhysicsHooks,
+        events: &dyn EventHandler,
+    ) {
         let clock = Instant::now();
-        self.report = CcdReport::default();
         select::record(bodies, &self.config, &mut self.report, &mut self.starts);
         let mut elapsed = clock.elapsed();
 
-        let mut params = *integration_parameters;
-        params.max_ccd_substeps = 0;
         pipeline.step(
             gravity,
-            &params,
+            params,
             islands,
             broad_phase,
             narrow_phase,
@@ -197,6 +309,8 @@ impl AffineCcd {
         );
 
         let clock = Instant::now();
+        self.report.pieces = 1;
+        self.report.shortest_piece = params.dt as f64;
         for &h in pipeline.quarantine().bodies() {
             self.report.skip(h, SkipReason::NonFinite);
         }
@@ -212,7 +326,7 @@ impl AffineCcd {
                 &mut self.moved,
             );
             if self.moved.iter().any(|m| m.fast || m.pusher) {
-                let opts = self.options(&params);
+                let opts = self.options(params);
                 let scene = Scene {
                     bodies,
                     colliders,
@@ -235,7 +349,6 @@ impl AffineCcd {
         }
         elapsed += clock.elapsed();
         self.report.elapsed = elapsed;
-        &self.report
     }
 
     /// Clamps the hit bodies, then reports the sensors crossed before each

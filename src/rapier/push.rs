@@ -83,6 +83,7 @@ pub(super) fn push(
                         start: *rb.position(),
                         end: *rb.position(),
                         angvel: Vector::ZERO,
+                        accel: Vector::ZERO,
                         fast: false,
                         pusher: false,
                         travel: 0.0,

@@ -57,6 +57,10 @@ pub struct CcdReport {
     /// Sensor crossings inside the step reported as Started + Stopped.
     pub sensor_crossings: usize,
     pub skipped: Vec<SkippedBody>,
+    /// Solver pieces the step ran (1 unless `CcdConfig::substeps` > 1).
+    pub pieces: usize,
+    /// Length of the shortest piece, seconds.
+    pub shortest_piece: f64,
     /// Time spent in the stage (recording, selection, queries, clamps),
     /// rapier's own step excluded.
     pub elapsed: Duration,
@@ -66,6 +70,34 @@ impl CcdReport {
     /// Number of bodies clamped.
     pub fn clamps(&self) -> usize {
         self.hits.len()
+    }
+
+    /// Adds the account of a piece of the step that began `start` seconds
+    /// into a step of `dt` seconds (hit times become the whole step's).
+    pub(crate) fn absorb(&mut self, piece: &CcdReport, start: f64, dt: f64) {
+        self.bodies_swept += piece.bodies_swept;
+        self.pairs += piece.pairs;
+        self.pairs_touching_at_start += piece.pairs_touching_at_start;
+        self.evaluations += piece.evaluations;
+        self.sensor_crossings += piece.sensor_crossings;
+        for hit in &piece.hits {
+            let time = start + hit.time;
+            self.hits.push(CcdHitEvent {
+                time,
+                fraction: time / dt,
+                ..*hit
+            });
+        }
+        for s in &piece.skipped {
+            self.skip(s.body, s.reason.clone());
+        }
+        self.shortest_piece = if self.pieces == 0 {
+            piece.shortest_piece
+        } else {
+            self.shortest_piece.min(piece.shortest_piece)
+        };
+        self.pieces += piece.pieces;
+        self.elapsed += piece.elapsed;
     }
 
     pub(crate) fn skip(&mut self, body: RigidBodyHandle, reason: SkipReason) {

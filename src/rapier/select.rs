@@ -29,6 +29,11 @@ pub(crate) struct Moved {
     pub end: Pose,
     /// Angular velocity after the solve, rad/s: chooses the whole turns.
     pub angvel: Vector,
+    /// Constant acceleration of the centre of mass, m/s². Zero for a
+    /// recorded step (the body runs straight from `start` to `end`); gravity
+    /// and forces for a predicted one (`substep`), whose `end` is then where
+    /// the body would be without them.
+    pub accel: Vector,
     /// A dynamic body, not opted out, fast enough to tunnel.
     pub fast: bool,
     /// A kinematic body fast enough to pass through dynamic bodies (by the
@@ -83,7 +88,7 @@ pub(crate) fn thickness(shape: &dyn Shape) -> f64 {
     }
 }
 
-fn body_thickness(rb: &RigidBody, colliders: &ColliderSet) -> f64 {
+pub(crate) fn body_thickness(rb: &RigidBody, colliders: &ColliderSet) -> f64 {
     rb.colliders()
         .iter()
         .filter_map(|h| colliders.get(*h))
@@ -100,7 +105,7 @@ fn angle_bound(short: f64, hint: f64) -> f64 {
 }
 
 /// The shortest rotation angle from `start` to `end`, radians.
-fn angle_short(start: &Pose, end: &Pose) -> f64 {
+pub(crate) fn angle_short(start: &Pose, end: &Pose) -> f64 {
     let dq = end.rotation * start.rotation.inverse();
     2.0 * (dq.xyz().length() as f64).atan2(dq.w.abs() as f64)
 }
@@ -149,6 +154,7 @@ pub(crate) fn moved(
             start: start.pose,
             end,
             angvel: turn_hint(rb, &start.pose, &end, dt),
+            accel: Vector::ZERO,
             fast,
             pusher,
             travel,
