@@ -2,13 +2,15 @@
 //!
 //! ```text
 //! cargo run --release --example demo -- [--scene NAME]... [--backend NAME]...
-//!     [--steps N] [--epsilon X] [--json FILE] [--svg DIR]
+//!     [--steps N] [--epsilon X] [--substeps N] [--json FILE] [--svg DIR]
 //! ```
 //!
 //! `--scene` matches substrings of scene names and may repeat; `--backend`
 //! takes off, rapier or affine and may repeat (default: all three);
 //! `--steps` overrides every scene's step count; `--epsilon` is handed to the
-//! affine backend; `--json` writes the rows to a file; `--svg` writes one
+//! affine backend; `--substeps` cuts steps at the first impact into at most
+//! N pieces (rapier's `max_ccd_substeps`, the stage's
+//! `CcdConfig::substeps`); `--json` writes the rows to a file; `--svg` writes one
 //! side-view drawing per scene and backend into a folder.
 
 use affine_ccd::scenes::runner::RunError;
@@ -26,12 +28,13 @@ struct Args {
     backends: Vec<Backend>,
     steps: Option<usize>,
     epsilon: Option<f64>,
+    substeps: Option<u32>,
     json: Option<PathBuf>,
     svg: Option<PathBuf>,
 }
 
 const USAGE: &str = "usage: demo [--scene NAME]... [--backend off|rapier|affine]... \
-[--steps N] [--epsilon X] [--json FILE] [--svg DIR]";
+[--steps N] [--epsilon X] [--substeps N] [--json FILE] [--svg DIR]";
 
 fn parse_args() -> Result<Args, String> {
     let mut args = Args::default();
@@ -57,6 +60,13 @@ fn parse_args() -> Result<Args, String> {
                     return Err(format!("--epsilon must be positive, got {v}"));
                 }
                 args.epsilon = Some(eps);
+            }
+            "--substeps" => {
+                let v = value()?;
+                match v.parse::<u32>() {
+                    Ok(n) if n >= 1 => args.substeps = Some(n),
+                    _ => return Err(format!("--substeps: `{v}` is not a count of at least 1")),
+                }
             }
             "--json" => args.json = Some(value()?.into()),
             "--svg" => args.svg = Some(value()?.into()),
@@ -95,6 +105,7 @@ fn main() -> ExitCode {
         ..RunOptions::default()
     };
     options.backend.epsilon = args.epsilon;
+    options.backend.substeps = args.substeps;
 
     let runs = scenes.len() * args.backends.len();
     let bar = if std::io::stdout().is_terminal() {
@@ -183,6 +194,9 @@ fn reproduce(args: &Args) -> String {
     }
     if let Some(e) = args.epsilon {
         parts.push(format!("--epsilon {e}"));
+    }
+    if let Some(n) = args.substeps {
+        parts.push(format!("--substeps {n}"));
     }
     parts.join(" ")
 }

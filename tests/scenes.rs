@@ -125,3 +125,41 @@ fn the_oracle_sees_tunnelling_without_ccd_and_nothing_on_slow_scenes() {
     );
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
+
+/// The stage cutting steps at the first impact (`CcdConfig::substeps`):
+/// as clean as the clamp on every scene, beside rapier's own CCD with the
+/// same `max_ccd_substeps`.
+#[test]
+fn with_substeps_the_stage_stays_clean_on_every_scene() {
+    use affine_ccd::scenes::backend::BackendConfig;
+    let mut failures = Vec::new();
+    for scene in scenes::all() {
+        let options = RunOptions {
+            steps: Some(scene.steps.min(MAX_STEPS)),
+            backend: BackendConfig {
+                substeps: Some(4),
+                ..BackendConfig::default()
+            },
+            ..RunOptions::default()
+        };
+        let ours = run_scene(&scene, Backend::Affine, &options).expect("affine runs");
+        let theirs = run_scene(&scene, Backend::Rapier, &options).expect("rapier runs");
+        println!(
+            "{:<26} substeps 4: affine ({}, {}, {}), rapier ({}, {}, {}) (tunnelling, missed, deep)",
+            scene.name,
+            ours.tunnelling,
+            ours.missed_contacts,
+            ours.deep_ends,
+            theirs.tunnelling,
+            theirs.missed_contacts,
+            theirs.deep_ends
+        );
+        if !ours.is_clean() {
+            failures.push(format!(
+                "{} / affine, 4 substeps: {} tunnelling, {} missed, {} deep: expected all zero",
+                scene.name, ours.tunnelling, ours.missed_contacts, ours.deep_ends
+            ));
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}

@@ -187,6 +187,7 @@ impl AffineCcd {
                 pipeline,
                 gravity,
                 &params,
+                dt,
                 islands,
                 broad_phase,
                 narrow_phase,
@@ -203,13 +204,18 @@ impl AffineCcd {
         let mut total = CcdReport::default();
         substep::record_aims(bodies, &mut self.aims);
         let (mut remaining, mut left) = (dt, self.config.substeps);
+        // Whether the last piece ended at a predicted impact.
+        let mut at_impact = false;
         while left > 0 {
             // Predict over the rest of the step; the piece ends at the first
-            // impact.
+            // impact. Right after one it is the shortest allowed: the
+            // contact just made bounces there (see `substep::piece`).
             let clock = Instant::now();
             let opts = self.options(&params);
             let mut predicted = std::mem::take(&mut self.moved);
-            let impact = if left > 1 {
+            let impact = if at_impact {
+                Some(0.0)
+            } else if left > 1 {
                 let scene = Scene {
                     bodies,
                     colliders,
@@ -239,6 +245,7 @@ impl AffineCcd {
             };
             self.moved = predicted;
             let (length, after) = substep::piece(remaining, left, impact, params.min_ccd_dt);
+            at_impact = impact.is_some_and(|t| t > 0.0) && after > 0;
             let done = dt - remaining;
             substep::aim(bodies, &self.aims, (done + length) / dt);
             total.elapsed += clock.elapsed();
@@ -250,6 +257,7 @@ impl AffineCcd {
                 pipeline,
                 gravity,
                 &piece,
+                dt,
                 islands,
                 broad_phase,
                 narrow_phase,
@@ -269,14 +277,15 @@ impl AffineCcd {
         &self.report
     }
 
-    /// One rapier step of `params.dt` and the sweeps and clamps after it,
-    /// accounted in `self.report`.
+    /// One rapier step of `params.dt` (a piece of a step of `step_dt`) and
+    /// the sweeps and clamps after it, accounted in `self.report`.
     #[allow(clippy::too_many_arguments)]
     fn step_piece(
         &mut self,
         pipeline: &mut PhysicsPipeline,
         gravity: Vector,
         params: &IntegrationParameters,
+        step_dt: f32,
         islands: &mut IslandManager,
         broad_phase: &mut BroadPhaseBvh,
         narrow_phase: &mut NarrowPhase,
@@ -321,6 +330,7 @@ impl AffineCcd {
                 bodies,
                 colliders,
                 dt,
+                step_dt as f64,
                 &self.config,
                 &mut self.report,
                 &mut self.moved,

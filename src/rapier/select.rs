@@ -110,13 +110,19 @@ pub(crate) fn angle_short(start: &Pose, end: &Pose) -> f64 {
     2.0 * (dq.xyz().length() as f64).atan2(dq.w.abs() as f64)
 }
 
-/// The bodies of `starts` that moved, each marked fast or not. A body
-/// whose end state is not finite is reported and left out.
+/// The bodies of `starts` that moved during `dt` seconds, each marked fast
+/// or not. A body counts as fast when its velocity would take it across
+/// its thickness within `horizon` seconds (`dt`, or the whole step when
+/// `dt` is a piece of it: a body that tunnels over the step is swept in
+/// every piece, however short). A body whose end state is not finite is
+/// reported and left out.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn moved(
     starts: &[Start],
     bodies: &RigidBodySet,
     colliders: &ColliderSet,
     dt: f64,
+    horizon: f64,
     config: &CcdConfig,
     report: &mut CcdReport,
     out: &mut Vec<Moved>,
@@ -145,7 +151,8 @@ pub(crate) fn moved(
         let travel = (shift + extent * angle_bound(short, spin).min(2.0)) * (1.0 + 1.0e-4) + 1.0e-6;
         // Arc length of the farthest point; the velocity term is rapier's.
         let arc = shift + extent * short.max(spin);
-        let by_velocity = (rb.linvel().length() as f64 + rb.angvel().length() as f64 * extent) * dt;
+        let by_velocity =
+            (rb.linvel().length() as f64 + rb.angvel().length() as f64 * extent) * horizon.max(dt);
         let tunnels = arc.max(by_velocity) > config.fast_factor * body_thickness(rb, colliders);
         let fast = rb.is_dynamic() && !config.opted_out(rb.user_data) && tunnels;
         let pusher = rb.is_kinematic() && config.targets.kinematic && tunnels;

@@ -152,8 +152,10 @@ pub(crate) fn predict(
 
 /// Seconds from now to the earliest impact of a fast body (or fast
 /// kinematic body) on its predicted motion over `horizon`; `None` when
-/// none is predicted. A failed query predicts nothing: the piece's own
-/// sweep reports it.
+/// none is predicted. Pairs touching at the start are left out: they are
+/// the contact solver's (a resting body pulled into the ground would
+/// otherwise cut every step). A failed query predicts nothing: the
+/// piece's own sweep reports it.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn first_impact(
     scene: &Scene,
@@ -165,6 +167,10 @@ pub(crate) fn first_impact(
     ws: &mut Workspace,
     report: &mut CcdReport,
 ) -> Option<f64> {
+    let opts = QueryOptions {
+        initial_contact: crate::InitialContact::Ignore,
+        ..*opts
+    };
     let motions = Motions::new(predicted, horizon);
     ws.motions.clear();
     let mut earliest: Option<f64> = None;
@@ -179,7 +185,7 @@ pub(crate) fn first_impact(
             &motions,
             body,
             Targets::All,
-            opts,
+            &opts,
             ws,
             &mut scratch,
             &mut sensors,
@@ -202,10 +208,10 @@ pub(crate) fn first_impact(
 ///
 /// The piece ends at the impact, but not before `min_dt` (rapier's
 /// `1/dt` stays sane) and not `min_dt` or less before the step's end. A
-/// short piece is what a bounce wants: rapier's solver reverses a
-/// velocity in the step that meets the contact but does not move the body
-/// in it, so the piece after an impact (the pair then touches and is
-/// predicted to sink) should be as short as allowed.
+/// short piece is what a bounce wants: rapier's solver turns a velocity
+/// in the step that meets the contact but does not move the body in it,
+/// so the piece after one that ended at an impact is asked with an impact
+/// at 0, the shortest allowed.
 pub(crate) fn piece(remaining: f32, left: u32, impact: Option<f64>, min_dt: f32) -> (f32, u32) {
     if left <= 1 {
         return (remaining, 0);
@@ -235,8 +241,8 @@ mod tests {
         assert_eq!(piece(dt, 1, Some(0.001), min), (dt, 0));
         // An impact half way: the piece ends there.
         assert_eq!(piece(dt, 4, Some(0.5 * dt as f64), min), (0.5 * dt, 3));
-        // An impact right away (a body touching at the start and predicted
-        // to sink): the shortest piece, for rapier's contacts to bounce it.
+        // An impact right away (the piece after an impact): the shortest
+        // piece, for rapier's contacts to bounce it.
         assert_eq!(piece(dt, 4, Some(0.0), min), (min, 3));
         // An impact at the very end: no sliver piece after it.
         assert_eq!(piece(dt, 4, Some(0.999 * dt as f64), min), (dt, 0));

@@ -4,7 +4,8 @@
 //!   (`integration_parameters.max_ccd_substeps = 0`, which also zeroes the
 //!   CCD velocities), whatever the bodies' `ccd_enabled` flag says.
 //! - `rapier`: rapier's defaults (`max_ccd_substeps = 1`, the post-solve
-//!   clamp) honouring the scenes' `ccd_enabled` bodies.
+//!   clamp, or `BackendConfig::substeps`) honouring the scenes'
+//!   `ccd_enabled` bodies.
 //! - `affine`: this crate's stage, [`crate::rapier::AffineCcd`], installed
 //!   into the world (its dispatcher in, rapier's CCD off).
 
@@ -66,6 +67,9 @@ pub struct BackendConfig {
     /// Accuracy of the affine backend as a fraction of the step; `None` for
     /// its default. Ignored by `off` and `rapier`.
     pub epsilon: Option<f64>,
+    /// Solver pieces per step at most, for `rapier` (`max_ccd_substeps`)
+    /// and `affine` (`CcdConfig::substeps`); `None` for their default (1).
+    pub substeps: Option<u32>,
 }
 
 /// Steps a world, with or without a CCD stage.
@@ -95,13 +99,15 @@ impl Stepper for Off {
     }
 }
 
-/// Rapier's defaults with its own CCD.
-struct Rapier;
+/// Rapier's own CCD with this many substeps (its default: 1).
+struct Rapier {
+    substeps: usize,
+}
 
 impl Stepper for Rapier {
     fn install(&mut self, world: &mut PhysicsWorld) {
-        // Rapier's default; set explicitly in case a scene changed it.
-        world.integration_parameters.max_ccd_substeps = 1;
+        // Set explicitly in case a scene changed it.
+        world.integration_parameters.max_ccd_substeps = self.substeps;
     }
 
     fn step(&mut self, world: &mut PhysicsWorld) {
@@ -139,11 +145,16 @@ impl Stepper for Affine {
 pub fn make_stepper(backend: Backend, config: &BackendConfig) -> Option<Box<dyn Stepper>> {
     match backend {
         Backend::Off => Some(Box::new(Off)),
-        Backend::Rapier => Some(Box::new(Rapier)),
+        Backend::Rapier => Some(Box::new(Rapier {
+            substeps: config.substeps.unwrap_or(1).max(1) as usize,
+        })),
         Backend::Affine => {
             let mut ccd = crate::rapier::AffineCcd::default();
             if let Some(epsilon) = config.epsilon {
                 ccd.config_mut().epsilon = epsilon;
+            }
+            if let Some(substeps) = config.substeps {
+                ccd.config_mut().substeps = substeps;
             }
             Some(Box::new(Affine {
                 ccd,
