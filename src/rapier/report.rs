@@ -27,9 +27,6 @@ pub struct CcdHitEvent {
 pub enum SkipReason {
     /// Its pose or velocity was NaN or infinite (before or after the step).
     NonFinite,
-    /// It was asleep or absent before the step and moved during it: no
-    /// start pose was recorded.
-    NoStartPose,
     /// The time-of-impact query failed; the message says why.
     Query(String),
 }

@@ -1,7 +1,8 @@
 //! Which bodies moved, and which of them can tunnel.
 //!
-//! Before the step we record the pose of every awake, enabled, non-fixed
-//! body (targets that move need their start pose too). After it we keep the
+//! Before the step we record the pose of every enabled, non-fixed body,
+//! asleep or not (targets that move need their start pose too, and a
+//! sleeping body may be woken and thrown during the step). After it we keep the
 //! dynamic ones whose fastest point went farther than `fast_factor` times
 //! their thinnest extent: rapier's post-solve test, with the rotation
 //! counted as an arc (whole turns included, through the velocity term)
@@ -48,8 +49,11 @@ fn finite_vels(rb: &RigidBody) -> bool {
     rb.linvel().is_finite() && rb.angvel().is_finite()
 }
 
-/// The poses of the bodies that may move during the next step. Dynamic
-/// bodies with a non-finite state are reported and left out.
+/// The poses of the bodies that may move during the next step, sleeping
+/// ones included: a body asleep at the start can be woken by a hit during
+/// the step and leave it fast (the long soak lost a resting compound
+/// through the floor that way). Dynamic bodies with a non-finite state are
+/// reported and left out.
 pub(crate) fn record(
     bodies: &RigidBodySet,
     config: &CcdConfig,
@@ -58,7 +62,7 @@ pub(crate) fn record(
 ) {
     out.clear();
     for (handle, rb) in bodies.iter() {
-        if rb.is_fixed() || !rb.is_enabled() || rb.is_sleeping() {
+        if rb.is_fixed() || !rb.is_enabled() {
             continue;
         }
         if !rb.position().is_finite() || !finite_vels(rb) {
