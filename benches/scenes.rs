@@ -3,16 +3,43 @@
 //! reported as ratios: affine/rapier and affine/off.
 //!
 //! `cargo bench --bench scenes` (prints a table; no criterion: each scene
-//! run is already a median over its steps).
+//! run is already a median over its steps). `-- --substeps N` runs rapier
+//! and affine cutting steps into at most N pieces (`max_ccd_substeps`,
+//! `CcdConfig::substeps`).
 
+use affine_ccd::scenes::backend::BackendConfig;
 use affine_ccd::scenes::{self, Backend, RunOptions, run_scene};
 
 /// Each scene is run this many times per backend; the smallest median
 /// step time is kept (the least disturbed run).
 const REPEATS: usize = 3;
 
+/// The value after `--substeps`, if given (cargo adds its own `--bench`).
+fn substeps_arg() -> Option<u32> {
+    let args: Vec<String> = std::env::args().collect();
+    let at = args.iter().position(|a| a == "--substeps")?;
+    match args.get(at + 1).and_then(|v| v.parse().ok()) {
+        Some(n) if n >= 1 => Some(n),
+        _ => {
+            eprintln!("--substeps needs a count of at least 1");
+            std::process::exit(2);
+        }
+    }
+}
+
 fn main() {
-    println!("reproduce: cargo bench --bench scenes");
+    let substeps = substeps_arg();
+    let options = RunOptions {
+        backend: BackendConfig {
+            substeps,
+            ..BackendConfig::default()
+        },
+        ..RunOptions::default()
+    };
+    match substeps {
+        Some(n) => println!("reproduce: cargo bench --bench scenes -- --substeps {n}"),
+        None => println!("reproduce: cargo bench --bench scenes"),
+    }
     println!(
         "{:<26} {:>9} {:>9} {:>9} {:>13} {:>10}",
         "scene", "off ms", "rapier ms", "affine ms", "affine/rapier", "affine/off"
@@ -25,7 +52,7 @@ fn main() {
                 .zip([Backend::Off, Backend::Rapier, Backend::Affine])
         {
             *slot = (0..REPEATS)
-                .filter_map(|_| run_scene(&scene, backend, &RunOptions::default()).ok())
+                .filter_map(|_| run_scene(&scene, backend, &options).ok())
                 .map(|r| r.median_step_ms)
                 .fold(f64::INFINITY, f64::min);
         }
