@@ -181,41 +181,30 @@ impl AffineCcd {
         let mut params = *integration_parameters;
         params.max_ccd_substeps = 0;
         let dt = params.dt;
-        if self.config.substeps <= 1 || dt <= 0.0 {
-            self.report = CcdReport::default();
-            self.step_piece(
-                pipeline,
-                gravity,
-                &params,
-                dt,
-                islands,
-                broad_phase,
-                narrow_phase,
-                bodies,
-                colliders,
-                impulse_joints,
-                multibody_joints,
-                soft_bodies,
-                hooks,
-                events,
-            );
-            return &self.report;
-        }
+        let substeps = if dt > 0.0 {
+            self.config.substeps.max(1)
+        } else {
+            1
+        };
         let mut total = CcdReport::default();
-        substep::record_aims(bodies, &mut self.aims);
-        let (mut remaining, mut left) = (dt, self.config.substeps);
+        if substeps > 1 {
+            substep::record_aims(bodies, &mut self.aims);
+        } else {
+            self.aims.clear();
+        }
+        let (mut remaining, mut left) = (dt, substeps);
         // Whether the last piece ended at a predicted impact.
         let mut at_impact = false;
+        // One piece, the whole step, unless `substeps` > 1.
         while left > 0 {
             // Predict over the rest of the step; the piece ends at the first
             // impact. Right after one it is the shortest allowed: the
             // contact just made bounces there (see `substep::piece`).
             let clock = Instant::now();
-            let opts = self.options(&params);
-            let mut predicted = std::mem::take(&mut self.moved);
             let impact = if at_impact {
                 Some(0.0)
             } else if left > 1 {
+                let opts = self.options(&params);
                 let scene = Scene {
                     bodies,
                     colliders,
@@ -223,6 +212,7 @@ impl AffineCcd {
                     hooks,
                     config: &self.config,
                 };
+                let mut predicted = std::mem::take(&mut self.moved);
                 substep::predict(
                     &scene,
                     gravity,
@@ -230,7 +220,7 @@ impl AffineCcd {
                     remaining as f64,
                     &mut predicted,
                 );
-                substep::first_impact(
+                let impact = substep::first_impact(
                     &scene,
                     broad_phase,
                     narrow_phase,
@@ -239,11 +229,12 @@ impl AffineCcd {
                     &opts,
                     &mut self.workspace,
                     &mut total,
-                )
+                );
+                self.moved = predicted;
+                impact
             } else {
                 None
             };
-            self.moved = predicted;
             let (length, after) = substep::piece(remaining, left, impact, params.min_ccd_dt);
             at_impact = impact.is_some_and(|t| t > 0.0) && after > 0;
             let done = dt - remaining;

@@ -70,18 +70,19 @@ impl CcdReport {
     }
 
     /// Adds the account of a piece of the step that began `start` seconds
-    /// into a step of `dt` seconds (hit times become the whole step's).
+    /// into a step of `dt` seconds (hit times become the whole step's; a
+    /// piece that is the whole step keeps them to the bit).
     pub(crate) fn absorb(&mut self, piece: &CcdReport, start: f64, dt: f64) {
         self.bodies_swept += piece.bodies_swept;
         self.pairs += piece.pairs;
         self.pairs_touching_at_start += piece.pairs_touching_at_start;
         self.evaluations += piece.evaluations;
         self.sensor_crossings += piece.sensor_crossings;
+        let (offset, share) = (start / dt, piece.shortest_piece / dt);
         for hit in &piece.hits {
-            let time = start + hit.time;
             self.hits.push(CcdHitEvent {
-                time,
-                fraction: time / dt,
+                time: start + hit.time,
+                fraction: offset + hit.fraction * share,
                 ..*hit
             });
         }
