@@ -352,3 +352,83 @@ fn a_scene_without_fast_bodies_steps_bit_identically_with_substeps() {
         }
     }
 }
+
+#[test]
+fn a_sensor_crossed_before_an_impact_reports_started_and_stopped_once() {
+    use std::sync::mpsc::channel;
+    let mut run = Run::new(Ccd::Affine(4));
+    run.world.insert(
+        RigidBodyBuilder::fixed(),
+        ColliderBuilder::cuboid(0.05, 2.0, 2.0)
+            .sensor(true)
+            .active_events(ActiveEvents::COLLISION_EVENTS),
+    );
+    run.world.insert(
+        RigidBodyBuilder::fixed().translation(Vector::new(2.0, 0.0, 0.0)),
+        ColliderBuilder::cuboid(0.05, 2.0, 2.0),
+    );
+    run.world.insert(
+        RigidBodyBuilder::dynamic()
+            .translation(Vector::new(-1.5, 0.0, 0.0))
+            .linvel(Vector::new(200.0, 0.0, 0.0)),
+        ColliderBuilder::ball(0.1).active_events(ActiveEvents::COLLISION_EVENTS),
+    );
+    let (send, recv) = channel();
+    let (force_send, _force_recv) = channel();
+    let (tear_send, _tear_recv) = channel();
+    let events = ChannelEventCollector::new(send, force_send, tear_send);
+    let stage = run.stage.as_mut().unwrap();
+    let mut pieces = 0;
+    for _ in 0..3 {
+        pieces = pieces.max(stage.step_with_events(&mut run.world, &(), &events).pieces);
+    }
+    let all: Vec<CollisionEvent> = recv.try_iter().collect();
+    let started = all.iter().filter(|e| e.started() && e.sensor()).count();
+    let stopped = all.iter().filter(|e| e.stopped() && e.sensor()).count();
+    println!("sensor before a wall: {pieces} pieces at most, events {all:?}");
+    assert!(pieces >= 2, "the wall impact did not cut the step");
+    assert_eq!((started, stopped), (1, 1), "events: {all:?}");
+}
+
+#[test]
+fn a_nan_velocity_with_substeps_skips_that_body_and_the_others_step_on() {
+    use affine_ccd::rapier::SkipReason;
+    let mut run = Run::new(Ccd::Affine(4));
+    run.world.insert(
+        RigidBodyBuilder::fixed().translation(Vector::new(3.0, 0.0, 0.0)),
+        ColliderBuilder::cuboid(0.05, 2.0, 2.0),
+    );
+    let bullet = run
+        .world
+        .insert(
+            RigidBodyBuilder::dynamic().linvel(Vector::new(300.0, 0.0, 0.0)),
+            ColliderBuilder::ball(0.25),
+        )
+        .0;
+    let bad = run
+        .world
+        .insert(
+            RigidBodyBuilder::dynamic().translation(Vector::new(0.0, -3.0, 0.0)),
+            ColliderBuilder::ball(0.25),
+        )
+        .0;
+    run.world.bodies[bad].set_linvel(Vector::new(f32::NAN, 0.0, 0.0), true);
+    run.step();
+    let report = run.stage.as_ref().unwrap().report();
+    assert!(
+        report
+            .skipped
+            .iter()
+            .any(|s| s.body == bad && s.reason == SkipReason::NonFinite),
+        "the NaN body is not reported: {report:?}"
+    );
+    for _ in 0..5 {
+        run.step();
+    }
+    let x = run.world.bodies[bullet].translation().x;
+    assert!(
+        x.is_finite() && x > 0.0 && x < 3.0,
+        "the bullet did not step on to the wall and stop (x = {x})"
+    );
+    assert!(run.world.bodies[bad].position().is_finite());
+}
