@@ -5,7 +5,7 @@
 //! The default run is short; the full one (300 bodies, 10,000 steps) is
 //! ignored: `cargo test --release --test soak -- --ignored --nocapture`.
 
-use affine_ccd::rapier::AffineCcd;
+use affine_ccd::rapier::{AffineCcd, CcdConfig};
 use rapier3d::prelude::*;
 
 /// Half the inner size of the box, metres.
@@ -90,12 +90,13 @@ fn closed_box(world: &mut PhysicsWorld) {
     }
 }
 
-/// Runs `bodies` bodies for `steps` steps; panics on the first body outside
-/// the box or non-finite pose, naming the step and the body.
-fn soak(bodies: usize, steps: usize, seed: u64) {
+/// Runs `bodies` bodies for `steps` steps under the stage with `config`;
+/// panics on the first body outside the box or non-finite pose, naming the
+/// step and the body.
+fn soak(bodies: usize, steps: usize, seed: u64, config: CcdConfig) {
     let mut rng = Rng(seed);
     let mut world = PhysicsWorld::default();
-    let mut ccd = AffineCcd::default();
+    let mut ccd = AffineCcd::new(config);
     ccd.install(&mut world);
     closed_box(&mut world);
     let mut handles = Vec::new();
@@ -147,14 +148,23 @@ fn soak(bodies: usize, steps: usize, seed: u64) {
 
 #[test]
 fn a_short_soak_keeps_every_body_in_the_box() {
-    soak(60, 300, 1);
+    soak(60, 300, 1, CcdConfig::default());
+}
+
+#[test]
+fn a_short_soak_with_substeps_keeps_every_body_in_the_box() {
+    let config = CcdConfig {
+        substeps: 4,
+        ..CcdConfig::default()
+    };
+    soak(60, 300, 1, config);
 }
 
 #[test]
 #[ignore = "takes minutes: run by hand and report"]
 fn a_long_soak_keeps_every_body_in_the_box() {
     // SOAK_BODIES / SOAK_STEPS / SOAK_SEED override the run (for bisecting a
-    // failure on a shorter run).
+    // failure on a shorter run); SOAK_SUBSTEPS sets `CcdConfig::substeps`.
     let env = |name: &str, default: u64| {
         std::env::var(name)
             .ok()
@@ -165,5 +175,9 @@ fn a_long_soak_keeps_every_body_in_the_box() {
         env("SOAK_BODIES", 300) as usize,
         env("SOAK_STEPS", 10_000) as usize,
         env("SOAK_SEED", 2),
+        CcdConfig {
+            substeps: env("SOAK_SUBSTEPS", 1) as u32,
+            ..CcdConfig::default()
+        },
     );
 }
