@@ -238,7 +238,9 @@ impl AffineCcd {
             let (length, after) = substep::piece(remaining, left, impact, params.min_ccd_dt);
             at_impact = impact.is_some_and(|t| t > 0.0) && after > 0;
             let done = dt - remaining;
-            substep::aim(bodies, &self.aims, (done + length) / dt);
+            // The last piece aims at the user's target itself.
+            let share = if after == 0 { 1.0 } else { (done + length) / dt };
+            substep::aim(bodies, &self.aims, share);
             total.elapsed += clock.elapsed();
 
             let mut piece = params;
