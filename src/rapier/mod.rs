@@ -239,7 +239,11 @@ impl AffineCcd {
             at_impact = impact.is_some_and(|t| t > 0.0) && after > 0;
             let done = dt - remaining;
             // The last piece aims at the user's target itself.
-            let share = if after == 0 { 1.0 } else { (done + length) / dt };
+            let share = if after == 0 {
+                1.0
+            } else {
+                (done + length) / dt
+            };
             substep::aim(bodies, &self.aims, share);
             total.elapsed += clock.elapsed();
 
