@@ -78,6 +78,7 @@ impl CcdReport {
         self.pairs_touching_at_start += piece.pairs_touching_at_start;
         self.evaluations += piece.evaluations;
         self.sensor_crossings += piece.sensor_crossings;
+        // A piece's own report has one piece: its length.
         let (offset, share) = (start / dt, piece.shortest_piece / dt);
         for hit in &piece.hits {
             self.hits.push(CcdHitEvent {

@@ -152,7 +152,7 @@ pub(crate) fn moved(
         let extent = rb.mass_properties().max_extent() as f64;
         let spin = rb.angvel().length() as f64 * dt;
         let short = angle_short(&start.pose, &end);
-        let travel = (shift + extent * angle_bound(short, spin).min(2.0)) * (1.0 + 1.0e-4) + 1.0e-6;
+        let travel = travel_bound(shift, extent, angle_bound(short, spin));
         // Arc length of the farthest point; the velocity term is rapier's.
         let arc = shift + extent * short.max(spin);
         let by_velocity =
@@ -173,13 +173,21 @@ pub(crate) fn moved(
     }
 }
 
+/// Bound on how far any point of a body moves, metres: its centre of
+/// mass's `shift` plus the chord of its farthest point (`extent` from the
+/// centre) turned by `angle` radians (at most two extents), padded for
+/// rounding.
+pub(crate) fn travel_bound(shift: f64, extent: f64, angle: f64) -> f64 {
+    (shift + extent * angle.min(2.0)) * (1.0 + 1.0e-4) + 1.0e-6
+}
+
 /// Bound on how far any point of `rb` moves on the shortest motion from
 /// `start` to `end`, metres (the `travel` of a motion rebuilt by the stage).
 pub(crate) fn travel_between(rb: &RigidBody, start: &Pose, end: &Pose) -> f64 {
     let com = rb.local_center_of_mass();
     let shift = (*end * com - *start * com).length() as f64;
     let extent = rb.mass_properties().max_extent() as f64;
-    (shift + extent * angle_short(start, end).min(2.0)) * (1.0 + 1.0e-4) + 1.0e-6
+    travel_bound(shift, extent, angle_short(start, end))
 }
 
 /// How far from a free spin (radians) the end orientation may be for the

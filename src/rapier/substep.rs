@@ -134,7 +134,7 @@ pub(crate) fn predict(
             Some(_) => (super::select::angle_short(&start, &end), Vector::ZERO),
             None => (w.length() as f64 * horizon, w),
         };
-        let travel = (shift + extent * spin.min(2.0)) * (1.0 + 1.0e-4) + 1.0e-6;
+        let travel = super::select::travel_bound(shift, extent, spin);
         let tunnels =
             shift + extent * spin > scene.config.fast_factor * body_thickness(rb, scene.colliders);
         out.push(Moved {
