@@ -212,26 +212,23 @@ impl AffineCcd {
                     hooks,
                     config: &self.config,
                 };
-                let mut predicted = std::mem::take(&mut self.moved);
                 substep::predict(
                     &scene,
                     gravity,
                     &self.aims,
                     remaining as f64,
-                    &mut predicted,
+                    &mut self.moved,
                 );
-                let impact = substep::first_impact(
+                substep::first_impact(
                     &scene,
                     broad_phase,
                     narrow_phase,
-                    &predicted,
+                    &self.moved,
                     remaining as f64,
                     &opts,
                     &mut self.workspace,
                     &mut total,
-                );
-                self.moved = predicted;
-                impact
+                )
             } else {
                 None
             };
