@@ -5,7 +5,10 @@
 //!
 //! Run: `cargo test --release --test rapier_stage`.
 
+mod common;
+
 use affine_ccd::rapier::{AffineCcd, CcdConfig, SkipReason};
+use common::Run;
 use rapier3d::parry::shape::Cuboid;
 use rapier3d::prelude::*;
 use std::sync::mpsc::channel;
@@ -19,31 +22,15 @@ enum Ccd {
     Rapier,
 }
 
-struct Run {
-    world: PhysicsWorld,
-    stage: Option<AffineCcd>,
-}
-
 impl Run {
     fn new(ccd: Ccd, gravity: Vector) -> Run {
-        let mut world = PhysicsWorld {
+        let world = PhysicsWorld {
             gravity,
             ..PhysicsWorld::default()
         };
-        let stage = (ccd == Ccd::Affine).then(|| {
-            let stage = AffineCcd::new(CcdConfig::default());
-            stage.install(&mut world);
-            stage
-        });
-        Run { world, stage }
-    }
-
-    fn step(&mut self) {
-        match &mut self.stage {
-            Some(stage) => {
-                stage.step(&mut self.world);
-            }
-            None => self.world.step(),
+        match ccd {
+            Ccd::Affine => Run::affine(world, CcdConfig::default()),
+            Ccd::Rapier => Run::rapier(world),
         }
     }
 

@@ -5,7 +5,10 @@
 //!
 //! Run: `cargo test --release --test substeps -- --nocapture`.
 
-use affine_ccd::rapier::{AffineCcd, CcdConfig};
+mod common;
+
+use affine_ccd::rapier::CcdConfig;
+use common::Run;
 use rapier3d::prelude::*;
 
 /// Which CCD steps a scene, with how many pieces per step at most.
@@ -15,40 +18,24 @@ enum Ccd {
     Rapier(usize),
 }
 
-struct Run {
-    world: PhysicsWorld,
-    stage: Option<AffineCcd>,
-}
-
 impl Run {
     fn new(ccd: Ccd) -> Run {
         let mut world = PhysicsWorld {
             gravity: Vector::ZERO,
             ..PhysicsWorld::default()
         };
-        let stage = match ccd {
-            Ccd::Affine(substeps) => {
-                let stage = AffineCcd::new(CcdConfig {
+        match ccd {
+            Ccd::Affine(substeps) => Run::affine(
+                world,
+                CcdConfig {
                     substeps,
                     ..CcdConfig::default()
-                });
-                stage.install(&mut world);
-                Some(stage)
-            }
+                },
+            ),
             Ccd::Rapier(substeps) => {
                 world.integration_parameters.max_ccd_substeps = substeps;
-                None
+                Run::rapier(world)
             }
-        };
-        Run { world, stage }
-    }
-
-    fn step(&mut self) {
-        match &mut self.stage {
-            Some(stage) => {
-                stage.step(&mut self.world);
-            }
-            None => self.world.step(),
         }
     }
 }

@@ -1,5 +1,6 @@
-//! Shared helpers for the integration tests: a seeded random generator and
-//! small statistics. (A dozen lines; not worth a dependency.)
+//! Shared helpers for the integration tests: a seeded random generator,
+//! small statistics (a dozen lines; not worth a dependency) and a world
+//! stepped by the stage or by rapier alone.
 #![allow(dead_code)]
 
 /// SplitMix64: tiny, seeded, good enough to spread test cases.
@@ -59,4 +60,39 @@ pub fn quantile(values: &[f64], q: f64) -> f64 {
     v.sort_by(|a, b| a.total_cmp(b));
     let i = ((v.len() - 1) as f64 * q).round() as usize;
     v[i]
+}
+
+/// A world stepped by the affine-ccd stage (`stage` is `Some`) or by rapier
+/// alone, its own CCD as the world's parameters say.
+pub struct Run {
+    pub world: rapier3d::prelude::PhysicsWorld,
+    pub stage: Option<affine_ccd::rapier::AffineCcd>,
+}
+
+impl Run {
+    /// The stage with `config`, installed into `world`.
+    pub fn affine(
+        mut world: rapier3d::prelude::PhysicsWorld,
+        config: affine_ccd::rapier::CcdConfig,
+    ) -> Run {
+        let stage = affine_ccd::rapier::AffineCcd::new(config);
+        stage.install(&mut world);
+        Run {
+            world,
+            stage: Some(stage),
+        }
+    }
+
+    pub fn rapier(world: rapier3d::prelude::PhysicsWorld) -> Run {
+        Run { world, stage: None }
+    }
+
+    pub fn step(&mut self) {
+        match &mut self.stage {
+            Some(stage) => {
+                stage.step(&mut self.world);
+            }
+            None => self.world.step(),
+        }
+    }
 }
