@@ -324,19 +324,7 @@ fn a_scene_without_fast_bodies_steps_bit_identically_with_substeps() {
         ours.step();
         theirs.step();
         assert_eq!(ours.stage.as_ref().unwrap().report().pieces, 1);
-        for (ha, hb) in a.iter().zip(&b) {
-            let (pa, pb) = (
-                ours.world.bodies[*ha].position(),
-                theirs.world.bodies[*hb].position(),
-            );
-            assert!(
-                pa.translation.to_array().map(f32::to_bits)
-                    == pb.translation.to_array().map(f32::to_bits)
-                    && pa.rotation.to_array().map(f32::to_bits)
-                        == pb.rotation.to_array().map(f32::to_bits),
-                "step {step}: poses differ: {pa:?} with the stage, {pb:?} without"
-            );
-        }
+        common::assert_same_poses(step, &ours, &a, &theirs, &b);
     }
 }
 

@@ -96,3 +96,27 @@ impl Run {
         }
     }
 }
+
+/// Asserts that bodies `a` of `ours` and `b` of `theirs` (in pairs) have
+/// bit-identical poses after step `step`.
+pub fn assert_same_poses(
+    step: usize,
+    ours: &Run,
+    a: &[rapier3d::prelude::RigidBodyHandle],
+    theirs: &Run,
+    b: &[rapier3d::prelude::RigidBodyHandle],
+) {
+    for (ha, hb) in a.iter().zip(b) {
+        let (pa, pb) = (
+            ours.world.bodies[*ha].position(),
+            theirs.world.bodies[*hb].position(),
+        );
+        assert!(
+            pa.translation.to_array().map(f32::to_bits)
+                == pb.translation.to_array().map(f32::to_bits)
+                && pa.rotation.to_array().map(f32::to_bits)
+                    == pb.rotation.to_array().map(f32::to_bits),
+            "step {step}: poses differ: {pa:?} with the stage, {pb:?} without"
+        );
+    }
+}
