@@ -21,7 +21,7 @@ use rapier3d::parry::utils::Array2;
 use std::path::PathBuf;
 
 /// The sample queries, relative to this crate's manifest directory.
-const SAMPLE_DIR: &str = "../shared/data/ccd-sample-queries/unit-tests";
+const SAMPLE_DIR: &str = "tests/data/ccd-sample-queries/unit-tests";
 
 /// One sample query: 8 points and the exact answer.
 struct Sample {
@@ -49,7 +49,7 @@ fn load_samples(kind: &str) -> Vec<Sample> {
         .unwrap_or_else(|e| {
             panic!(
                 "the sample queries are missing: cannot read {} ({e}); \
-                 they live in shared/data beside the crate",
+                 they live in tests/data of the repository",
                 dir.display()
             )
         })
@@ -184,7 +184,7 @@ fn sample_queries_have_no_false_negatives() {
 // Composites against dense sampling.
 
 const DT: f64 = 1.0 / 60.0;
-/// Samples of the exact motions per case (DESIGN.md: ≥ 2048).
+/// Samples of the exact motions per case (≥ 2048).
 const SAMPLES: usize = 4096;
 
 /// parry's distance at τ, from the motions' own `f64` poses (rounded to

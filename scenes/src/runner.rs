@@ -1,0 +1,131 @@
+//! Runs one scene under one backend and reports what the two oracles saw.
+
+use super::Scene;
+pub use super::backend::{Backend, BackendConfig, Stepper, make_stepper};
+use super::counter::{self, ContactKind};
+use super::guard::GuardWatch;
+use super::snapshot::Snapshot;
+use super::svg::Trace;
+use std::fmt;
+use std::time::{Duration, Instant};
+
+/// How to run a scene.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct RunOptions {
+    /// Number of steps; `None` for the scene's own.
+    pub steps: Option<usize>,
+    /// Handed to the backend (see [`BackendConfig`]).
+    pub backend: BackendConfig,
+    /// Keep trajectories and event positions for an SVG drawing.
+    pub trace: bool,
+}
+
+/// Why a scene could not run.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RunError {
+    /// The backend is not built yet.
+    Unavailable(Backend),
+}
+
+impl fmt::Display for RunError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            RunError::Unavailable(backend) => write!(f, "{backend}: not built yet"),
+        }
+    }
+}
+
+impl std::error::Error for RunError {}
+
+/// What one run of one scene under one backend gave.
+#[derive(Clone, Debug)]
+pub struct SceneReport {
+    pub scene: &'static str,
+    pub backend: Backend,
+    /// Per-scene invariant violations ([`super::guard`]).
+    pub tunnelling: usize,
+    /// Contacts deeper than the limit between the poses only ([`super::counter`]).
+    pub missed_contacts: usize,
+    /// Steps that started shallow and ended deep ([`super::counter`]).
+    pub deep_ends: usize,
+    /// Steps run.
+    pub steps: usize,
+    /// Median wall time of one step (milliseconds), the oracles excluded.
+    pub median_step_ms: f64,
+    /// Total time spent in CCD (milliseconds), when the backend can measure it.
+    pub ccd_ms: Option<f64>,
+    /// The drawing material, when asked for.
+    pub trace: Option<Trace>,
+}
+
+impl SceneReport {
+    /// Whether either oracle saw anything.
+    pub fn is_clean(&self) -> bool {
+        self.tunnelling == 0 && self.missed_contacts == 0 && self.deep_ends == 0
+    }
+}
+
+/// Runs `scene` under `backend`.
+///
+/// Each step: scripted kinematic bodies get their targets, a snapshot is
+/// taken, the backend steps (timed), then the guards and the contact
+/// counter judge the step.
+pub fn run_scene(
+    scene: &Scene,
+    backend: Backend,
+    options: &RunOptions,
+) -> Result<SceneReport, RunError> {
+    let mut stepper =
+        make_stepper(backend, &options.backend).ok_or(RunError::Unavailable(backend))?;
+    let (mut world, setup) = scene.instantiate();
+    stepper.install(&mut world);
+    let steps = options.steps.unwrap_or(scene.steps);
+    let mut watch = GuardWatch::new(&world, &setup.guards);
+    let mut trace = options.trace.then(|| Trace::start(&world, scene.view));
+    let mut times = Vec::with_capacity(steps);
+    let (mut tunnelling, mut missed_contacts, mut deep_ends) = (0, 0, 0);
+    for step in 0..steps {
+        let end_time = (step + 1) as f32 * scene.dt;
+        for script in &setup.scripts {
+            script.apply(&mut world, end_time);
+        }
+        let before = Snapshot::take(&world);
+        let started = Instant::now();
+        stepper.step(&mut world);
+        times.push(started.elapsed());
+        let tunnels = watch.check(&world, &setup.guards, &before, step);
+        let contacts = counter::check_step(&world, &before, step);
+        tunnelling += tunnels.len();
+        for event in &contacts {
+            match event.kind {
+                ContactKind::Missed => missed_contacts += 1,
+                ContactKind::DeepEnd => deep_ends += 1,
+            }
+        }
+        if let Some(trace) = &mut trace {
+            trace.record(&world);
+            trace.tunnels.extend(tunnels.iter().map(|e| e.at));
+            trace.contacts.extend(contacts.iter().map(|e| e.at));
+        }
+    }
+    Ok(SceneReport {
+        scene: scene.name,
+        backend,
+        tunnelling,
+        missed_contacts,
+        deep_ends,
+        steps,
+        median_step_ms: median_ms(&mut times),
+        ccd_ms: stepper.ccd_time().map(|d| d.as_secs_f64() * 1e3),
+        trace,
+    })
+}
+
+/// Median of `times` in milliseconds (0 when empty).
+fn median_ms(times: &mut [Duration]) -> f64 {
+    if times.is_empty() {
+        return 0.0;
+    }
+    times.sort_unstable();
+    times[times.len() / 2].as_secs_f64() * 1e3
+}

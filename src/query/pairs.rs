@@ -1,0 +1,259 @@
+//! The pairs of one query as the solver sees them.
+
+use super::frames::{FrameDef, Frames};
+use crate::enclosure::{Enclosure, InArithmetic, TimeSpan};
+use crate::error::CcdError;
+use crate::gap::composite::{self, SubRegion, PairSide, Region};
+use crate::gap::{self, PairGap, Side};
+use crate::solve::{GapSet, SolveOptions, SolveOutcome, Solver};
+
+/// One search over a query's pairs, in whichever arithmetic the query
+/// chose: the outcome and the caller's (moving, target) indices of the pair
+/// that may touch. A gap that could not be built mid-search (a piece with
+/// bad parameters) is reported as its error after the search.
+pub(super) struct Search<'a, 's> {
+    pub solver: &'a mut Solver,
+    pub frames: Vec<FrameDef>,
+    pub pairs: Vec<PairEntry<'s>>,
+    pub skin: f64,
+    pub options: &'a SolveOptions,
+}
+
+impl InArithmetic for Search<'_, '_> {
+    type Output = Result<(SolveOutcome, Option<(usize, usize)>), CcdError>;
+
+    fn run<E: Enclosure>(self) -> Self::Output {
+        let Search {
+            solver,
+            frames,
+            pairs,
+            skin,
+            options,
+        } = self;
+        // A frame's rotation is enclosed only if some pair reads it (pairs
+        // that composites create later only involve frames of composite
+        // pairs, which read it).
+        let mut rotation_read = vec![false; frames.len()];
+        for pair in &pairs {
+            let [a, b] = match &pair.kind {
+                PairContent::Leaf(gap, false) => gap.reads_rotation(),
+                PairContent::Leaf(gap, true) => {
+                    let [a, b] = gap.reads_rotation();
+                    [b, a]
+                }
+                _ => [true, true],
+            };
+            rotation_read[pair.a as usize] |= a;
+            rotation_read[pair.b as usize] |= b;
+        }
+        let mut set = PairSet::<E> {
+            frames: Frames::new(frames, rotation_read),
+            initial: pairs.len(),
+            pairs,
+            skin,
+            scratch: Vec::new(),
+            error: None,
+        };
+        let outcome = solver.solve(&mut set, options)?;
+        if let Some(error) = set.error {
+            return Err(error);
+        }
+        let hit = outcome
+            .pair
+            .map(|p| (set.pairs[p].moving, set.pairs[p].target));
+        Ok((outcome, hit))
+    }
+}
+
+/// What a pair is.
+pub(super) enum PairContent<'s> {
+    /// A gap family; `true` when its `a` side is the entry's `b` frame.
+    Leaf(PairGap, bool),
+    /// A bounding gap over two parts, one of which splits.
+    Composite(CompositePair<'s>),
+    /// A piece whose gap could not be built: never apart (the error is
+    /// reported after the search).
+    Broken,
+}
+
+/// A composite pair and, once split, its children with their pair ids
+/// (made on first need and kept: repeated splits on later nodes reuse them).
+pub(super) struct CompositePair<'s> {
+    a: PairSide<'s>,
+    b: PairSide<'s>,
+    split_b: bool,
+    kids: Option<Vec<(SubRegion<'s>, Option<u32>)>>,
+}
+
+impl<'s> CompositePair<'s> {
+    pub fn new(a: PairSide<'s>, b: PairSide<'s>) -> CompositePair<'s> {
+        CompositePair {
+            split_b: composite::split_b(&a, &b),
+            a,
+            b,
+            kids: None,
+        }
+    }
+}
+
+/// One pair of the search: what it is, the frames of its two sides, and
+/// the caller's indices of the shapes it came from.
+pub(super) struct PairEntry<'s> {
+    pub kind: PairContent<'s>,
+    pub a: u32,
+    pub b: u32,
+    pub moving: usize,
+    pub target: usize,
+}
+
+/// The pairs of a query as the solver sees them: the caller's pairs first,
+/// then the pairs that splitting composites creates during the search (an
+/// arena that only grows within a query; each child pair is made once per
+/// parent and child). Poses come from the shared [`Frames`].
+struct PairSet<'s, E: Enclosure> {
+    frames: Frames<E>,
+    pairs: Vec<PairEntry<'s>>,
+    initial: usize,
+    skin: f64,
+    scratch: Vec<SubRegion<'s>>,
+    error: Option<CcdError>,
+}
+
+impl<'s, E: Enclosure> PairSet<'s, E> {
+    /// A new pair between two items, in this order; returns its id.
+    fn make_pair(&mut self, a: PairSide<'s>, b: PairSide<'s>, moving: usize, target: usize) -> u32 {
+        let kind = match (a.part.shape(), b.part.shape()) {
+            (Some(sa), Some(sb)) => match gap::build(sa, sb, self.skin) {
+                Ok(built) => PairContent::Leaf(built.gap, built.swapped),
+                Err(e) => {
+                    self.error.get_or_insert(e);
+                    PairContent::Broken
+                }
+            },
+            _ => PairContent::Composite(CompositePair::new(a, b)),
+        };
+        self.pairs.push(PairEntry {
+            kind,
+            a: a.frame,
+            b: b.frame,
+            moving,
+            target,
+        });
+        (self.pairs.len() - 1) as u32
+    }
+}
+
+impl<E: Enclosure> GapSet<E> for PairSet<'_, E> {
+    fn pair_count(&self) -> usize {
+        self.initial
+    }
+
+    fn axis_count(&self, pair: usize) -> usize {
+        match &self.pairs[pair].kind {
+            PairContent::Leaf(gap, _) => gap.axis_count(),
+            PairContent::Composite(_) => composite::AXES,
+            PairContent::Broken => 1,
+        }
+    }
+
+    fn is_exact(&self, pair: usize) -> bool {
+        matches!(&self.pairs[pair].kind, PairContent::Leaf(gap, _) if gap.is_exact())
+    }
+
+    fn begin_node(&mut self, _span: TimeSpan) {
+        self.frames.begin_node();
+    }
+
+    fn eval(&mut self, pair: usize, span: TimeSpan, axes: u64, out: &mut [E]) {
+        let entry = &self.pairs[pair];
+        let (fa, fb) = (entry.a, entry.b);
+        match &entry.kind {
+            PairContent::Leaf(_, swapped) => {
+                let (fa, fb) = if *swapped { (fb, fa) } else { (fa, fb) };
+                let (pa, pb) = (self.frames.pose(fa, span), self.frames.pose(fb, span));
+                let a = Side {
+                    pose: &pa,
+                    motion: self.frames.motion(fa),
+                };
+                let b = Side {
+                    pose: &pb,
+                    motion: self.frames.motion(fb),
+                };
+                if let PairContent::Leaf(gap, _) = &self.pairs[pair].kind {
+                    gap.eval(span, &a, &b, axes, out);
+                }
+            }
+            PairContent::Composite(c) => {
+                let (small, big) = if c.split_b { (c.a, c.b) } else { (c.b, c.a) };
+                let rel = self.frames.relative(big.frame, small.frame, span);
+                composite::bounding_axes(&rel, &small.bounds, &big.bounds, self.skin, out);
+            }
+            PairContent::Broken => out[0] = E::zero(),
+        }
+    }
+
+    fn expand(&mut self, pair: usize, span: TimeSpan, out: &mut Vec<u32>) -> bool {
+        let PairContent::Composite(c) = &mut self.pairs[pair].kind else {
+            return false;
+        };
+        let (split, other) = if c.split_b { (c.b, c.a) } else { (c.a, c.b) };
+        let split_b = c.split_b;
+        if c.kids.is_none() {
+            self.scratch.clear();
+            composite::children(&split.part, &mut self.scratch);
+            c.kids = Some(self.scratch.iter().map(|k| (*k, None)).collect());
+        }
+        let (moving, target) = (self.pairs[pair].moving, self.pairs[pair].target);
+        let rel = self.frames.relative(split.frame, other.frame, span);
+        let sweep = composite::swept(&rel, &other.bounds);
+        let count = match &self.pairs[pair].kind {
+            PairContent::Composite(c) => c.kids.as_ref().map_or(0, Vec::len),
+            _ => 0,
+        };
+        for k in 0..count {
+            let (child, id) = match &self.pairs[pair].kind {
+                PairContent::Composite(c) => c.kids.as_ref().expect("split above")[k],
+                _ => unreachable!("a composite pair stays one"),
+            };
+            if !composite::child_meets(&child, &sweep, self.skin) {
+                continue;
+            }
+            let id = match id {
+                Some(id) => id,
+                None => {
+                    let item = match child.local {
+                        None => PairSide {
+                            part: child.part,
+                            frame: split.frame,
+                            bounds: child.bounds,
+                        },
+                        Some((index, local)) => {
+                            let frame = self.frames.child(split.frame, index, &local);
+                            match child.part {
+                                Region::Shape(s) => PairSide::whole(s, frame),
+                                part => PairSide {
+                                    part,
+                                    frame,
+                                    bounds: child.bounds,
+                                },
+                            }
+                        }
+                    };
+                    let id = if split_b {
+                        self.make_pair(other, item, moving, target)
+                    } else {
+                        self.make_pair(item, other, moving, target)
+                    };
+                    if let PairContent::Composite(c) = &mut self.pairs[pair].kind {
+                        if let Some(kids) = c.kids.as_mut() {
+                            kids[k].1 = Some(id);
+                        }
+                    }
+                    id
+                }
+            };
+            out.push(id);
+        }
+        true
+    }
+}
