@@ -7,8 +7,8 @@
 //! and affine cutting steps into at most N pieces (`max_ccd_substeps`,
 //! `CcdConfig::substeps`).
 
-use affine_ccd::scenes::backend::BackendConfig;
-use affine_ccd::scenes::{self, Backend, RunOptions, run_scene};
+use affine_ccd_scenes::backend::BackendConfig;
+use affine_ccd_scenes::{self as scenes, Backend, RunOptions, run_scene};
 
 /// Each scene is run this many times per backend; the smallest median
 /// step time is kept (the least disturbed run).

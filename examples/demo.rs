@@ -13,8 +13,8 @@
 //! `CcdConfig::substeps`); `--json` writes the rows to a file; `--svg` writes one
 //! side-view drawing per scene and backend into a folder.
 
-use affine_ccd::scenes::runner::RunError;
-use affine_ccd::scenes::{self, Backend, RunOptions, SceneReport, run_scene};
+use affine_ccd_scenes::runner::RunError;
+use affine_ccd_scenes::{self as scenes, Backend, RunOptions, SceneReport, run_scene};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::io::IsTerminal;
 use std::path::PathBuf;

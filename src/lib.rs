@@ -18,17 +18,17 @@ pub(crate) mod gap;
 pub mod motion;
 pub mod query;
 pub mod rapier;
-pub mod scenes;
 pub mod solve;
-pub mod truth;
 
-pub use enclosure::{Affine, Arithmetic, Enclosure, Interval, Taylor, Taylor2, Taylor3, TimeSpan};
+pub use enclosure::{
+    Affine, Arithmetic, Enclosure, InArithmetic, Interval, Taylor, Taylor2, Taylor3, TimeSpan,
+};
 pub use error::CcdError;
 
 pub use motion::{Motion, Pose, Trajectory};
 pub use query::{ManyToi, QueryOptions, ShapeMotion, Toi, time_of_impact, time_of_impact_many};
 pub use solve::{
-    GapSet, InitialContact, RootStatus, SolveOptions, SolveOutcome, SolveStats, Solver, solve_in,
+    GapSet, InitialContact, RootStatus, SolveOptions, SolveOutcome, SolveStats, Solver,
 };
 
 /// The README's examples, compiled and run as doc tests.

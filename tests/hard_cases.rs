@@ -304,7 +304,7 @@ use rapier3d::parry::shape::{Capsule, Cuboid, Shape, TriMesh, Triangle};
 
 /// Earliest sampled contact of two shapes by parry's distance (f32 poses).
 fn sampled_contact(s1: &dyn Shape, m1: &Motion, s2: &dyn Shape, m2: &Motion) -> Option<f64> {
-    affine_ccd::truth::sample(s1, m1, s2, m2, 0.0, 4096)
+    affine_ccd_scenes::truth::sample(s1, m1, s2, m2, 0.0, 4096)
         .expect("parry answers")
         .first_contact
 }

@@ -13,7 +13,7 @@
 //!
 //! Run: `cargo test --release --test scenes -- --nocapture` to see the table.
 
-use affine_ccd::scenes::{self, Backend, RunOptions, SceneReport, run_scene};
+use affine_ccd_scenes::{self as scenes, Backend, RunOptions, SceneReport, run_scene};
 
 /// Upper bound on the steps of any scene in this test.
 const MAX_STEPS: usize = 300;
@@ -131,7 +131,7 @@ fn the_oracle_sees_tunnelling_without_ccd_and_nothing_on_slow_scenes() {
 /// same `max_ccd_substeps`.
 #[test]
 fn with_substeps_the_stage_stays_clean_on_every_scene() {
-    use affine_ccd::scenes::backend::BackendConfig;
+    use affine_ccd_scenes::backend::BackendConfig;
     let mut failures = Vec::new();
     for scene in scenes::all() {
         let options = RunOptions {

@@ -4,8 +4,8 @@
 #![allow(dead_code)]
 
 use affine_ccd::convert::{glam_from_vec, pose_from_iso};
-use affine_ccd::truth::{self, Truth};
 use affine_ccd::{Motion, Trajectory, query};
+use affine_ccd_scenes::truth::{self, Truth};
 use nalgebra::{Isometry3, Point3, Translation3, Vector3};
 use rapier3d::parry::math::Vector;
 use rapier3d::parry::query::{
