@@ -4,7 +4,7 @@
 //! `D_k(τ)`, each enclosed by the [`GapSet`] over any node of time. A pair is
 //! apart at `τ` when **any** of its axes is positive (separating axes compose
 //! as AND); the set is apart when **every** pair is (shapes compose as OR),
-//! DESIGN.md §3. Skins are the gap functions' business: an axis is written
+//! docs/design.md §3. Skins are the gap functions' business: an axis is written
 //! so that `D_k > 0` means "farther apart than the skin".
 //!
 //! The search walks nodes of time depth-first, earlier half first. On each
@@ -13,7 +13,7 @@
 //! 2. drops pairs that an axis proves apart (lower bound > 0), and inside a
 //!    surviving pair drops axes that can never separate on this node's
 //!    sub-nodes (upper bound below another axis's lower bound);
-//! 3. clips the node with each axis's linear lower bound (DESIGN.md §6): only
+//! 3. clips the node with each axis's linear lower bound (docs/design.md §6): only
 //!    where every axis of some pair may be `≤ 0` can a root lie;
 //! 4. stops when the clipped node is at most `ε` wide, reporting its start:
 //!    every earlier time has been excluded, so the report is never late;
@@ -23,8 +23,7 @@
 //! Buffers live in a [`Solver`] that callers keep between queries; the node
 //! loop itself allocates nothing once they have grown.
 
-use crate::enclosure::{Affine, Taylor2, Taylor3};
-use crate::enclosure::{Arithmetic, Enclosure, Interval, TimeSpan};
+use crate::enclosure::{Enclosure, Interval, TimeSpan};
 use crate::error::CcdError;
 
 /// The most axes one pair may have (a bit mask of `u64` tracks them).
@@ -193,7 +192,7 @@ struct Alive {
 
 /// When clipping leaves less than this share of a node, the clipped node
 /// is evaluated again instead of bisected: near a simple root the linear
-/// bound converges much faster than halving (DESIGN.md §6); a smaller
+/// bound converges much faster than halving (docs/design.md §6); a smaller
 /// shrink is not worth an evaluation of its own.
 const RECLIP_SHARE: f64 = 0.6;
 
@@ -294,7 +293,7 @@ impl Solver {
             if let Some(sure) = confirmed {
                 // A root lies in [clipped.lo, sure]: report when that is
                 // narrow enough, else look there first (the bracket shrinks
-                // quadratically near a simple root; DESIGN.md's "split next
+                // quadratically near a simple root; the calibration's "split next
                 // to the left end", guarded by certainty).
                 if sure - clipped.lo <= options.epsilon {
                     return Ok(hit(clipped.lo, node.earliest_pair, stats));
@@ -634,23 +633,4 @@ fn widen_out(q: f64, direction: f64) -> f64 {
         return direction;
     }
     q + direction * (1.0e-12 * (1.0 + q.abs()))
-}
-
-/// Run one search in the arithmetic `kind` on a gap set written generically
-/// over the arithmetic (a convenience over [`Solver::solve`]).
-pub fn solve_in<G>(
-    kind: Arithmetic,
-    solver: &mut Solver,
-    gaps: &mut G,
-    options: &SolveOptions,
-) -> Result<SolveOutcome, CcdError>
-where
-    G: GapSet<Interval> + GapSet<Affine> + GapSet<Taylor2> + GapSet<Taylor3>,
-{
-    match kind {
-        Arithmetic::Interval => solver.solve::<Interval, G>(gaps, options),
-        Arithmetic::Affine => solver.solve::<Affine, G>(gaps, options),
-        Arithmetic::Taylor2 => solver.solve::<Taylor2, G>(gaps, options),
-        Arithmetic::Taylor3 => solver.solve::<Taylor3, G>(gaps, options),
-    }
 }

@@ -5,8 +5,10 @@
 mod common;
 
 use affine_ccd::query::{QueryOptions, time_of_impact};
-use affine_ccd::solve::{GapSet, SolveOptions, Solver, solve_in};
-use affine_ccd::{Arithmetic, Enclosure, Motion, RootStatus, TimeSpan, Trajectory};
+use affine_ccd::solve::{GapSet, SolveOptions, SolveOutcome, Solver};
+use affine_ccd::{
+    Arithmetic, CcdError, Enclosure, InArithmetic, Motion, RootStatus, TimeSpan, Trajectory,
+};
 use common::{Rng, quantile};
 use nalgebra::{Isometry3, Point3, Translation3, Vector3};
 use rapier3d::parry::shape::Ball;
@@ -278,6 +280,32 @@ impl PolySet {
                 .any(|axes| axes.iter().all(|c| PolySet::value(c, t) <= 0.0))
         })
     }
+}
+
+/// A search of `set` in the arithmetic `kind`, through the crate's one
+/// arithmetic dispatch.
+fn solve_in(
+    kind: Arithmetic,
+    solver: &mut Solver,
+    set: &mut PolySet,
+    options: &SolveOptions,
+) -> Result<SolveOutcome, CcdError> {
+    struct Run<'a> {
+        solver: &'a mut Solver,
+        set: &'a mut PolySet,
+        options: &'a SolveOptions,
+    }
+    impl InArithmetic for Run<'_> {
+        type Output = Result<SolveOutcome, CcdError>;
+        fn run<E: Enclosure>(self) -> Self::Output {
+            self.solver.solve::<E, _>(self.set, self.options)
+        }
+    }
+    kind.dispatch(Run {
+        solver,
+        set,
+        options,
+    })
 }
 
 impl<E: Enclosure> GapSet<E> for PolySet {

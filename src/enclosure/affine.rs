@@ -1,4 +1,4 @@
-//! Affine forms over the one time symbol: `x0 + x1·e ± r` (DESIGN.md §1).
+//! Affine forms over the one time symbol: `x0 + x1·e ± r` (docs/design.md §1).
 //!
 //! This is the write-up's section 6 with its one flaw mended: the write-up
 //! keeps a single error term and adds `|x1|·|y1|` to it on each product. Here

@@ -10,7 +10,7 @@
 //! written once and evaluated in any of them:
 //! - [`Interval`]: a lower and an upper bound, the write-up's baseline. It
 //!   forgets dependencies: `x − x²` over `x ∈ [0, 1]` gives `[−1, 1]`.
-//! - [`Affine`]: `x0 + x1·e ± r`, DESIGN.md §1. Excess width shrinks with the
+//! - [`Affine`]: `x0 + x1·e ± r`, docs/design.md §1. Excess width shrinks with the
 //!   square of the node width; the default.
 //! - [`Taylor`]`<K>`: a polynomial of degree `K − 1` in `e` plus `± r`.
 //!   [`Taylor2`] and [`Taylor3`] are the degrees 2 and 3.
@@ -18,7 +18,7 @@
 //! ## Rounding
 //!
 //! Rust on stable has no portable way to switch the FPU's rounding mode, so
-//! soundness under rounding is kept in two ways (DESIGN.md §8):
+//! soundness under rounding is kept in two ways (docs/design.md §8):
 //! - [`Interval`] rounds every computed bound outward by one ulp with
 //!   `f64::next_down` / `f64::next_up`. A correctly rounded `+ − × ÷ sqrt` is
 //!   within half an ulp of the truth, so one ulp outward always contains it.
@@ -54,7 +54,7 @@ pub enum Arithmetic {
     /// Plain intervals: the write-up's baseline.
     Interval,
     /// Affine forms over the time symbol (the default: best speed/accuracy
-    /// on the calibration set in DESIGN.md).
+    /// on the calibration set of docs/accuracy.md).
     #[default]
     Affine,
     /// Taylor models of degree 2.
@@ -81,6 +81,24 @@ impl Arithmetic {
             Arithmetic::Taylor3 => "taylor3",
         }
     }
+
+    /// Runs `task` in this arithmetic: the one place that maps an
+    /// [`Arithmetic`] value to its enclosure type.
+    pub fn dispatch<T: InArithmetic>(self, task: T) -> T::Output {
+        match self {
+            Arithmetic::Interval => task.run::<Interval>(),
+            Arithmetic::Affine => task.run::<Affine>(),
+            Arithmetic::Taylor2 => task.run::<Taylor2>(),
+            Arithmetic::Taylor3 => task.run::<Taylor3>(),
+        }
+    }
+}
+
+/// Work written once over the arithmetic, run in the one a caller chose
+/// with [`Arithmetic::dispatch`].
+pub trait InArithmetic {
+    type Output;
+    fn run<E: Enclosure>(self) -> Self::Output;
 }
 
 /// A node of the step: the closed set of time fractions `lo ≤ τ ≤ hi`,
@@ -163,7 +181,7 @@ pub trait Enclosure:
     fn range(&self) -> Interval;
 
     /// `(a, b)` such that the enclosed function is `≥ a + b·e` for every
-    /// `e ∈ [−1, 1]` (the local symbol). Used to clip nodes (DESIGN.md §6).
+    /// `e ∈ [−1, 1]` (the local symbol). Used to clip nodes (docs/design.md §6).
     /// Intervals give `(lo, 0)`.
     fn linear_lower(&self) -> (f64, f64);
 

@@ -1,5 +1,5 @@
 //! Taylor models: a polynomial of degree `K − 1` in the node's time symbol
-//! plus a symmetric error term, DESIGN.md §2.
+//! plus a symmetric error term, docs/design.md §2.
 //!
 //! Products are truncated at degree `K − 1`; each dropped term `c·eᵏ` is
 //! bounded over `e ∈ [−1, 1]` (even `k`: `c/2 ± |c|/2`, odd: `±|c|`) and

@@ -6,8 +6,8 @@
 //! by the enclosed relative pose (so it sweeps with the node), against the
 //! other side's box; six axes, `lo_i − hi'_i − skin` and `lo'_i − hi_i −
 //! skin` per coordinate `i`, any of which `> 0` proves the pieces apart.
-//! When the pair survives a node, [`crate::solve::GapSet::expand`] splits
-//! one side (the larger that can be split) into its children:
+//! When the pair survives a node, the query's gap set (`GapSet::expand`)
+//! splits one side (the larger that can be split) into its children:
 //! - TriMesh, Polyline, Compound: the two children of a node of parry's BVH
 //!   ([`Bvh::traverse_indexed`] gives them lazily); a leaf is a triangle, a
 //!   segment, or a compound's part in its own frame;
@@ -144,7 +144,7 @@ impl<'s> Tree<'s> {
 
 /// What one side of a pair stands for.
 #[derive(Clone, Copy)]
-pub(crate) enum Part<'s> {
+pub(crate) enum Region<'s> {
     /// A whole shape: convex, or a composite's root.
     Shape(&'s dyn Shape),
     /// A node of a composite's BVH.
@@ -161,22 +161,22 @@ pub(crate) enum Part<'s> {
     Segment(Segment),
 }
 
-impl<'s> Part<'s> {
+impl<'s> Region<'s> {
     /// True when the part splits into children.
     pub fn is_composite(&self) -> bool {
         match self {
-            Part::Shape(s) => is_composite(*s),
-            Part::Node(..) | Part::Cells { .. } => true,
-            Part::Triangle(_) | Part::Segment(_) => false,
+            Region::Shape(s) => is_composite(*s),
+            Region::Node(..) | Region::Cells { .. } => true,
+            Region::Triangle(_) | Region::Segment(_) => false,
         }
     }
 
     /// The part as a shape, when it is one piece.
     pub fn shape(&self) -> Option<&dyn Shape> {
         match self {
-            Part::Shape(s) if !is_composite(*s) => Some(*s),
-            Part::Triangle(t) => Some(t),
-            Part::Segment(s) => Some(s),
+            Region::Shape(s) if !is_composite(*s) => Some(*s),
+            Region::Triangle(t) => Some(t),
+            Region::Segment(s) => Some(s),
             _ => None,
         }
     }
@@ -184,22 +184,22 @@ impl<'s> Part<'s> {
 
 /// One side of a pair: a part in a frame, with its box in that frame.
 #[derive(Clone, Copy)]
-pub(crate) struct Item<'s> {
-    pub part: Part<'s>,
+pub(crate) struct PairSide<'s> {
+    pub part: Region<'s>,
     pub frame: u32,
     pub bounds: Bounds,
 }
 
-impl<'s> Item<'s> {
+impl<'s> PairSide<'s> {
     /// A whole shape in `frame`.
-    pub fn whole(shape: &'s dyn Shape, frame: u32) -> Item<'s> {
+    pub fn whole(shape: &'s dyn Shape, frame: u32) -> PairSide<'s> {
         let bounds = match shape.as_typed_shape() {
             // The heightfield's own box (parry's `local_aabb` agrees).
             TypedShape::HeightField(hf) => cells_bounds(hf, (0, hf.nrows()), (0, hf.ncols())),
             _ => Bounds::of_aabb(&shape.compute_local_aabb()),
         };
-        Item {
-            part: Part::Shape(shape),
+        PairSide {
+            part: Region::Shape(shape),
             frame,
             bounds,
         }
@@ -209,8 +209,8 @@ impl<'s> Item<'s> {
 /// A child of a split part: what it is, its box in the parent's frame, and
 /// for a compound's part its index and pose in the parent's frame.
 #[derive(Clone, Copy)]
-pub(crate) struct Child<'s> {
-    pub part: Part<'s>,
+pub(crate) struct SubRegion<'s> {
+    pub part: Region<'s>,
     pub bounds: Bounds,
     pub local: Option<(u32, Isometry3<f64>)>,
 }
@@ -224,23 +224,23 @@ pub(crate) fn is_composite(shape: &dyn Shape) -> bool {
 }
 
 /// The children of `part` (at most two) into `out`.
-pub(crate) fn children<'s>(part: &Part<'s>, out: &mut Vec<Child<'s>>) {
+pub(crate) fn children<'s>(part: &Region<'s>, out: &mut Vec<SubRegion<'s>>) {
     match *part {
-        Part::Shape(shape) => match shape.as_typed_shape() {
+        Region::Shape(shape) => match shape.as_typed_shape() {
             TypedShape::TriMesh(m) => tree_children(Tree::Mesh(m), None, out),
             TypedShape::Polyline(l) => tree_children(Tree::Line(l), None, out),
             TypedShape::Compound(c) => tree_children(Tree::Parts(c), None, out),
             TypedShape::HeightField(hf) => cell_children(hf, (0, hf.nrows()), (0, hf.ncols()), out),
             _ => {}
         },
-        Part::Node(tree, node) => tree_children(tree, Some(node), out),
-        Part::Cells { field, rows, cols } => cell_children(field, rows, cols, out),
-        Part::Triangle(_) | Part::Segment(_) => {}
+        Region::Node(tree, node) => tree_children(tree, Some(node), out),
+        Region::Cells { field, rows, cols } => cell_children(field, rows, cols, out),
+        Region::Triangle(_) | Region::Segment(_) => {}
     }
 }
 
 /// The children of a BVH node (`None`: the root).
-fn tree_children<'s>(tree: Tree<'s>, node: Option<BvhNodeIndex>, out: &mut Vec<Child<'s>>) {
+fn tree_children<'s>(tree: Tree<'s>, node: Option<BvhNodeIndex>, out: &mut Vec<SubRegion<'s>>) {
     let mut at_subtree_root = node.is_some();
     tree.bvh()
         .traverse_indexed(node, |n: &BvhNode, id: BvhNodeIndex| {
@@ -253,23 +253,23 @@ fn tree_children<'s>(tree: Tree<'s>, node: Option<BvhNodeIndex>, out: &mut Vec<C
         });
 }
 
-fn tree_child<'s>(tree: Tree<'s>, n: &BvhNode, id: BvhNodeIndex) -> Child<'s> {
+fn tree_child<'s>(tree: Tree<'s>, n: &BvhNode, id: BvhNodeIndex) -> SubRegion<'s> {
     let bounds = Bounds::of_aabb(&n.aabb());
     let Some(leaf) = n.leaf_data() else {
-        return Child {
-            part: Part::Node(tree, id),
+        return SubRegion {
+            part: Region::Node(tree, id),
             bounds,
             local: None,
         };
     };
     match tree {
-        Tree::Mesh(m) => Child {
-            part: Part::Triangle(m.triangle(leaf)),
+        Tree::Mesh(m) => SubRegion {
+            part: Region::Triangle(m.triangle(leaf)),
             bounds,
             local: None,
         },
-        Tree::Line(l) => Child {
-            part: Part::Segment(l.segment(leaf)),
+        Tree::Line(l) => SubRegion {
+            part: Region::Segment(l.segment(leaf)),
             bounds,
             local: None,
         },
@@ -280,8 +280,8 @@ fn tree_child<'s>(tree: Tree<'s>, n: &BvhNode, id: BvhNodeIndex) -> Child<'s> {
                 iso.translation,
                 UnitQuaternion::new_normalize(iso.rotation.into_inner()),
             );
-            Child {
-                part: Part::Shape(shape.as_ref()),
+            SubRegion {
+                part: Region::Shape(shape.as_ref()),
                 bounds,
                 local: Some((leaf, iso)),
             }
@@ -329,7 +329,7 @@ fn cell_children<'s>(
     hf: &'s HeightField,
     rows: (usize, usize),
     cols: (usize, usize),
-    out: &mut Vec<Child<'s>>,
+    out: &mut Vec<SubRegion<'s>>,
 ) {
     let (nr, nc) = (rows.1.saturating_sub(rows.0), cols.1.saturating_sub(cols.0));
     if nr == 0 || nc == 0 {
@@ -339,8 +339,8 @@ fn cell_children<'s>(
         let (left, right) = hf.triangles_at(rows.0, cols.0);
         for t in [left, right].into_iter().flatten() {
             let corners = [t.a, t.b, t.c].map(crate::convert::vec_from_glam);
-            out.push(Child {
-                part: Part::Triangle(t),
+            out.push(SubRegion {
+                part: Region::Triangle(t),
                 bounds: Bounds::of_points(&corners),
                 local: None,
             });
@@ -355,8 +355,8 @@ fn cell_children<'s>(
         [(rows, (cols.0, m)), (rows, (m, cols.1))]
     };
     for (rows, cols) in halves {
-        out.push(Child {
-            part: Part::Cells {
+        out.push(SubRegion {
+            part: Region::Cells {
                 field: hf,
                 rows,
                 cols,
@@ -368,7 +368,7 @@ fn cell_children<'s>(
 }
 
 /// Which side of a composite pair to split: `true` for `b`.
-pub(crate) fn split_b(a: &Item, b: &Item) -> bool {
+pub(crate) fn split_b(a: &PairSide, b: &PairSide) -> bool {
     match (a.part.is_composite(), b.part.is_composite()) {
         (true, false) => false,
         (false, true) => true,
@@ -423,15 +423,15 @@ pub(crate) fn swept<E: Enclosure>(rel: &Pose<E>, small: &Bounds) -> [Interval; 3
 }
 
 /// True when the child's box meets the swept box.
-pub(crate) fn child_meets(child: &Child, sweep: &[Interval; 3], skin: f64) -> bool {
+pub(crate) fn child_meets(child: &SubRegion, sweep: &[Interval; 3], skin: f64) -> bool {
     child.bounds.meets(sweep, skin)
 }
 
 /// Representative pieces of a shape: the kinds of leaf a split reaches,
 /// one of each type (a compound's parts recursively, a mesh's first
 /// triangle, …), for checking up front that every leaf pair has a family.
-fn leaf_kinds<'s>(shape: &'s dyn Shape, out: &mut Vec<Piece<'s>>) {
-    let mut push = |p: Piece<'s>| {
+fn leaf_kinds<'s>(shape: &'s dyn Shape, out: &mut Vec<LeafSample<'s>>) {
+    let mut push = |p: LeafSample<'s>| {
         if !out
             .iter()
             .any(|q| q.shape().shape_type() == p.shape().shape_type())
@@ -442,17 +442,17 @@ fn leaf_kinds<'s>(shape: &'s dyn Shape, out: &mut Vec<Piece<'s>>) {
     match shape.as_typed_shape() {
         TypedShape::TriMesh(m) => {
             if m.num_triangles() > 0 {
-                push(Piece::Triangle(m.triangle(0)));
+                push(LeafSample::Triangle(m.triangle(0)));
             }
         }
         TypedShape::HeightField(hf) => {
             if let Some(t) = hf.triangles().next() {
-                push(Piece::Triangle(t));
+                push(LeafSample::Triangle(t));
             }
         }
         TypedShape::Polyline(l) => {
             if l.num_segments() > 0 {
-                push(Piece::Segment(l.segment(0)));
+                push(LeafSample::Segment(l.segment(0)));
             }
         }
         TypedShape::Compound(c) => {
@@ -464,23 +464,23 @@ fn leaf_kinds<'s>(shape: &'s dyn Shape, out: &mut Vec<Piece<'s>>) {
                 }
             }
         }
-        _ => push(Piece::Shape(shape)),
+        _ => push(LeafSample::Shape(shape)),
     }
 }
 
 /// A leaf piece, owned or borrowed.
-enum Piece<'s> {
+enum LeafSample<'s> {
     Shape(&'s dyn Shape),
     Triangle(Triangle),
     Segment(Segment),
 }
 
-impl Piece<'_> {
+impl LeafSample<'_> {
     fn shape(&self) -> &dyn Shape {
         match self {
-            Piece::Shape(s) => *s,
-            Piece::Triangle(t) => t,
-            Piece::Segment(s) => s,
+            LeafSample::Shape(s) => *s,
+            LeafSample::Triangle(t) => t,
+            LeafSample::Segment(s) => s,
         }
     }
 }

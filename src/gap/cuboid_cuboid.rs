@@ -1,12 +1,15 @@
-//! Cuboid against cuboid: the 15 separating axes (round cuboids too: the
-//! borders join the skin).
+//! Cuboid against cuboid: the 15 separating axes. They are exact for
+//! touching, not for distance, so `gap::build` sends here only borderless
+//! boxes with zero skin; with a skin or a round border the corners would
+//! count as close up to √3 times too early, and those pairs go to the
+//! adaptive family (`support_map.rs`).
 //!
 //! Everything is seen from box `a`'s frame: `R = R_aᵀR_b` (columns are
 //! `b`'s axes) and `t = R_aᵀ(t_b − t_a)`. For an axis `L` the boxes are
 //! apart by more than `s` when `|t·L| − r_a(L) − r_b(L) > s·|L|`, with
 //! `r(L) = Σ e_i·|L·axis_i|` each box's reach. The axes are `a`'s 3 face
 //! normals, `b`'s 3, and the 9 edge cross products `a_i × b_j`, kept
-//! unnormalised (DESIGN.md §4): for nearly parallel edges `|L| → 0` and the
+//! unnormalised (docs/design.md §4): for nearly parallel edges `|L| → 0` and the
 //! axis tends to `−s ≤ 0`, which never separates falsely. Every `|L| ≤ 1`
 //! (up to the orthonormality pad), so `s·1` stands for `s·|L|`.
 //!

@@ -6,7 +6,7 @@
 //! `[min_i L·v_i, max_i L·v_i]` and the box's `[−r, r]`, `r = Σ_k h_k·|L_k|`,
 //! do not meet. The axes: the box's 3 face normals, the triangle's normal
 //! `n = (v1 − v0) × (v2 − v0)` and the 9 crosses `e_k × (v_{j+1} − v_j)`, all
-//! unnormalised (DESIGN.md §4): near-parallel edges give `L ≈ 0`, never a
+//! unnormalised (docs/design.md §4): near-parallel edges give `L ≈ 0`, never a
 //! false separation. This set is complete for touching, so with zero skin
 //! every axis `≤ 0` means the shapes touch: the family is exact. With a skin
 //! or a border, corners would count as close early (as for two boxes), so

@@ -5,7 +5,7 @@
 //! enclosed poses on a node, and is built so that **an axis `> 0` proves
 //! the shapes farther apart than the skin** at every time of the node. The
 //! pair may touch only where every axis is `≤ 0` (separating axes compose as
-//! AND, DESIGN.md §3). Skins are baked into the axes at construction, in
+//! AND, docs/design.md §3). Skins are baked into the axes at construction, in
 //! each axis's own units.
 //!
 //! | pair | family | file |
@@ -100,7 +100,7 @@ impl PairGap {
     }
 
     /// Whether every axis `≤ 0` at a time means the shapes touch then
-    /// (see [`crate::solve::GapSet::is_exact`]): true for the families
+    /// (see `solve::GapSet::is_exact`): true for the families
     /// whose axis sets are complete; false where an adaptive axis stands in.
     pub fn is_exact(&self) -> bool {
         matches!(

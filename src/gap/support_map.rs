@@ -1,4 +1,4 @@
-//! Any two convex shapes: adaptive separating axes (DESIGN.md §5).
+//! Any two convex shapes: adaptive separating axes (docs/design.md §5).
 //!
 //! Capsules, cylinders, cones, convex hulls, segments, triangles and the
 //! rounded shapes have no finite complete set of separating axes. But *any*

@@ -10,7 +10,7 @@
 //!   a constant (`b`'s corners brought into `a`'s frame);
 //! - `2, 3`: the normal of triangle `b`, likewise in `b`'s frame;
 //! - `4..22`: `e_i × f_j` for the 3 × 3 edge pairs, each sign, in `b`'s frame
-//!   (`e_i` turns with the relative rotation; unnormalised, DESIGN.md §4, so
+//!   (`e_i` turns with the relative rotation; unnormalised, docs/design.md §4, so
 //!   parallel edges give a zero axis that never separates falsely);
 //! - `22`: the adaptive direction between the triangles' closest points at
 //!   the node's middle time (also covers coplanar neighbours, for which the

@@ -3,7 +3,7 @@
 use super::frames::{FrameDef, Frames};
 use crate::enclosure::{Enclosure, InArithmetic, TimeSpan};
 use crate::error::CcdError;
-use crate::gap::composite::{self, SubRegion, PairSide, Region};
+use crate::gap::composite::{self, PairSide, Region, SubRegion};
 use crate::gap::{self, PairGap, Side};
 use crate::solve::{GapSet, SolveOptions, SolveOutcome, Solver};
 

@@ -6,104 +6,44 @@
 //! by the largest travel of any moved body, and each moving candidate is
 //! then checked against its own swept box.
 
-use super::config::CcdConfig;
-use super::convert::{iso_from_pose, point_from_glam};
-use super::select::Moved;
-use crate::error::CcdError;
-use crate::motion::Motion;
+use super::moved::Moved;
+use super::world::{StageWorld, StepMotions};
+use crate::convert::pose_from_iso;
+use crate::motion::{Motion, Trajectory};
 use rapier3d::parry::bounding_volume::{Aabb, BoundingVolume};
+use rapier3d::parry::query::QueryDispatcher;
 use rapier3d::parry::shape::Shape;
 use rapier3d::prelude::{
-    ActiveEvents, ActiveHooks, BroadPhaseBvh, Collider, ColliderHandle, ColliderSet,
-    ImpulseJointSet, PairFilterContext, PhysicsHooks, QueryFilter, RigidBodyHandle, RigidBodySet,
-    RigidBodyType, SolverFlags,
+    ActiveEvents, ActiveHooks, BroadPhaseBvh, Collider, ColliderHandle, PairFilterContext,
+    QueryFilter, RigidBodyType, SolverFlags, Vector,
 };
-use std::collections::HashMap;
-
-/// The moved bodies of this step, by handle, and the step length.
-pub(crate) struct Motions<'a> {
-    pub moved: &'a [Moved],
-    pub index: HashMap<RigidBodyHandle, usize>,
-    pub dt: f64,
-    /// Largest travel of any moved body, metres.
-    pub margin: f64,
-}
-
-impl<'a> Motions<'a> {
-    pub fn new(moved: &'a [Moved], dt: f64) -> Motions<'a> {
-        Motions {
-            moved,
-            index: moved
-                .iter()
-                .enumerate()
-                .map(|(i, m)| (m.handle, i))
-                .collect(),
-            dt,
-            margin: moved.iter().map(|m| m.travel).fold(0.0, f64::max),
-        }
-    }
-
-    pub fn body(&self, handle: RigidBodyHandle) -> Option<&Moved> {
-        self.index.get(&handle).map(|i| &self.moved[*i])
-    }
-
-    /// A collider's motion over the step: its body's, or none.
-    pub fn collider(&self, co: &Collider, bodies: &RigidBodySet) -> Result<Motion, CcdError> {
-        let moved = co.parent().and_then(|h| self.body(h));
-        match (
-            moved,
-            co.position_wrt_parent(),
-            co.parent().and_then(|h| bodies.get(h)),
-        ) {
-            (Some(m), Some(local), Some(rb)) => {
-                let motion = Motion::from_poses(
-                    iso_from_pose(&(m.start * *local)),
-                    iso_from_pose(&(m.end * *local)),
-                    point_from_glam(local.inverse_transform_point(rb.local_center_of_mass())),
-                    self.dt,
-                    super::convert::vec_from_glam(m.angvel),
-                )?;
-                if m.accel == rapier3d::prelude::Vector::ZERO {
-                    Ok(motion)
-                } else {
-                    motion.with_acceleration(super::convert::vec_from_glam(m.accel))
-                }
-            }
-            _ => Motion::fixed(iso_from_pose(co.position())),
-        }
-    }
-}
 
 /// A box holding `shape` over the whole `motion`:
 /// every point stays within the travel bound of both its start and its end.
 pub(crate) fn swept_aabb(shape: &dyn Shape, motion: &Motion) -> Aabb {
-    use crate::motion::Trajectory;
     // The motion's own end: a motion cut by a clamp (possibly to a
     // standstill) ends before the collider's pose.
-    let end_box = shape.compute_aabb(&super::convert::pose_from_iso(&motion.pose_at(1.0)));
+    let end_box = shape.compute_aabb(&pose_from_iso(&motion.pose_at(1.0)));
     if motion.is_fixed() {
         return end_box;
     }
-    let start = super::convert::pose_from_iso(&motion.pose_at(0.0));
+    let start = pose_from_iso(&motion.pose_at(0.0));
     let sphere = shape.compute_local_bounding_sphere();
     let radius = sphere.center.length() as f64 + sphere.radius as f64;
     let travel = motion.travel_bound(radius);
     // f32 boxes: round the margin up, plus rounding of the poses themselves.
     let margin = ((travel * (1.0 + 1.0e-5)) as f32).next_up() + 1.0e-5;
     if !margin.is_finite() {
-        return Aabb::new(
-            rapier3d::prelude::Vector::splat(f32::MIN),
-            rapier3d::prelude::Vector::splat(f32::MAX),
-        );
+        return Aabb::new(Vector::splat(f32::MIN), Vector::splat(f32::MAX));
     }
     let a = shape.compute_aabb(&start).loosened(margin);
     let b = end_box.loosened(margin);
     a.intersection(&b).unwrap_or_else(|| a.merged(&b))
 }
 
-/// How a pair is handled.
+/// How a pair interacts.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) enum PairKind {
+pub(crate) enum Interaction {
     /// Contacts would push the shapes apart: a hit clamps.
     Solid,
     /// A sensor is involved: a crossing is reported, never clamped.
@@ -113,19 +53,10 @@ pub(crate) enum PairKind {
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Candidate {
     pub handle: ColliderHandle,
-    pub kind: PairKind,
+    pub interaction: Interaction,
 }
 
-/// Everything the pair rules read.
-pub(crate) struct Scene<'a> {
-    pub bodies: &'a RigidBodySet,
-    pub colliders: &'a ColliderSet,
-    pub joints: &'a ImpulseJointSet,
-    pub hooks: &'a dyn PhysicsHooks,
-    pub config: &'a CcdConfig,
-}
-
-fn body_type(scene: &Scene, co: &Collider) -> RigidBodyType {
+fn body_type(scene: &StageWorld, co: &Collider) -> RigidBodyType {
     co.parent()
         .and_then(|h| scene.bodies.get(h))
         .map_or(RigidBodyType::Fixed, |rb| rb.body_type())
@@ -133,13 +64,13 @@ fn body_type(scene: &Scene, co: &Collider) -> RigidBodyType {
 
 /// Rapier's rules for whether the fast collider `(h1, co1)` and `(h2, co2)`
 /// interact, and how; `None` when they do not.
-pub(crate) fn pair_kind(
-    scene: &Scene,
+pub(crate) fn interaction(
+    scene: &StageWorld,
     h1: ColliderHandle,
     co1: &Collider,
     h2: ColliderHandle,
     co2: &Collider,
-) -> Option<PairKind> {
+) -> Option<Interaction> {
     if h1 == h2 || !co2.is_enabled() || (co2.parent().is_some() && co2.parent() == co1.parent()) {
         return None;
     }
@@ -179,7 +110,7 @@ pub(crate) fn pair_kind(
             (co1.active_events() | co2.active_events()).contains(ActiveEvents::COLLISION_EVENTS);
         let allowed = !hooks.contains(ActiveHooks::FILTER_INTERSECTION_PAIR)
             || scene.hooks.filter_intersection_pair(&context());
-        return (reported && allowed).then_some(PairKind::Sensor);
+        return (reported && allowed).then_some(Interaction::Sensor);
     }
     if !co1.solver_groups().test(co2.solver_groups()) {
         return None;
@@ -190,7 +121,7 @@ pub(crate) fn pair_kind(
             return None;
         }
     }
-    Some(PairKind::Solid)
+    Some(Interaction::Solid)
 }
 
 /// The colliders the fast collider `(h1, co1)` with swept box `swept` may
@@ -198,10 +129,10 @@ pub(crate) fn pair_kind(
 /// their own swept box, `own_box`.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn gather(
-    scene: &Scene,
+    scene: &StageWorld,
     broad_phase: &BroadPhaseBvh,
-    dispatcher: &dyn rapier3d::parry::query::QueryDispatcher,
-    motions: &Motions,
+    dispatcher: &dyn QueryDispatcher,
+    motions: &StepMotions,
     h1: ColliderHandle,
     co1: &Collider,
     swept: &Aabb,
@@ -218,7 +149,7 @@ pub(crate) fn gather(
     let margin = ((motions.margin * (1.0 + 1.0e-5)) as f32).next_up();
     let wide = swept.loosened(margin);
     for (h2, co2) in query.intersect_aabb_conservative(wide) {
-        let Some(kind) = pair_kind(scene, h1, co1, h2, co2) else {
+        let Some(interaction) = interaction(scene, h1, co1, h2, co2) else {
             continue;
         };
         let moving = co2.parent().is_some_and(|b| motions.body(b).is_some());
@@ -230,6 +161,22 @@ pub(crate) fn gather(
         } else if !co2.compute_aabb().intersects(swept) {
             continue;
         }
-        out.push(Candidate { handle: h2, kind });
+        out.push(Candidate {
+            handle: h2,
+            interaction,
+        });
     }
+}
+
+/// A box holding the body's colliders over its whole (uncut) motion: their
+/// end boxes grown by the body's travel bound.
+pub(crate) fn body_box(scene: &StageWorld, m: &Moved) -> Option<Aabb> {
+    let rb = scene.bodies.get(m.handle)?;
+    let margin = ((m.travel * (1.0 + 1.0e-5)) as f32).next_up() + 1.0e-5;
+    rb.colliders()
+        .iter()
+        .filter_map(|h| scene.colliders.get(*h))
+        .filter(|co| co.is_enabled())
+        .map(|co| co.compute_aabb().loosened(margin))
+        .reduce(|a, b| a.merged(&b))
 }

@@ -5,8 +5,8 @@
 //! Velocities are kept: the next step's speculative contacts stop the body,
 //! as with rapier's own CCD.
 
-use super::convert::{iso_from_pose, point_from_glam, pose_from_iso, vec_from_glam};
-use super::select::Moved;
+use super::moved::Moved;
+use crate::convert::{iso_from_pose, point_from_glam, pose_from_iso, vec_from_glam};
 use crate::error::CcdError;
 use crate::motion::{Motion, Trajectory};
 use rapier3d::prelude::{ColliderSet, RigidBodySet};
@@ -42,7 +42,7 @@ pub(crate) fn truncate(
             value: f64::NAN,
         });
     }
-    let hint = super::select::turn_hint(rb, &body.start, &pose, dt);
+    let hint = super::turns::turn_hint(rb, &body.start, &pose, dt);
     let cut = Motion::from_poses(
         iso_from_pose(&body.start),
         iso_from_pose(&pose),
@@ -104,7 +104,7 @@ pub(crate) fn carry(
     let com = end * rb.local_center_of_mass();
     let pcom = pusher.end * pb.local_center_of_mass();
     let velocity = pb.linvel() + pb.angvel().cross(com - pcom);
-    let travel = super::select::travel_between(rb, &body.start, &end);
+    let travel = super::moved::travel_between(rb, &body.start, &end);
     Ok((
         Moved {
             end,

@@ -7,10 +7,10 @@
 //! queries (`cast_shape`, `cast_shape_nonlinear`) soundly. Everything else
 //! answers `Unsupported`: chain it with parry's `DefaultQueryDispatcher`.
 
-use super::convert::{glam_from_vec, iso_from_pose, vec_from_glam};
-use super::query::{QueryOptions, Toi, time_of_impact};
+use crate::convert::{glam_from_vec, iso_from_pose, vec_from_glam};
 use crate::enclosure::TimeSpan;
 use crate::motion::{Motion, Trajectory};
+use crate::query::{QueryOptions, Toi, time_of_impact};
 use crate::solve::RootStatus;
 use nalgebra::{Isometry3, Point3, Vector3};
 use rapier3d::math::{Pose, Real, Vector};

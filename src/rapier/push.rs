@@ -5,11 +5,12 @@
 //! the earliest impact is carried first, and a carried body joins the
 //! pusher's front for the later ones.
 
-use super::candidates::{Motions, Scene};
+use super::candidates::body_box;
+use super::clamp;
+use super::moved::Moved;
 use super::report::{CcdReport, SkipReason};
-use super::select::Moved;
 use super::sweep::{self, Workspace};
-use super::{body_box, clamp};
+use super::world::{StageWorld, StepMotions};
 use crate::query::QueryOptions;
 use rapier3d::prelude::{BroadPhaseBvh, RigidBodyHandle, Vector};
 
@@ -38,7 +39,7 @@ struct Cand {
 /// the pushers and the carried bodies.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn push(
-    scene: &Scene,
+    scene: &StageWorld,
     broad_phase: &BroadPhaseBvh,
     dispatcher: &dyn rapier3d::parry::query::QueryDispatcher,
     current: &mut Vec<Moved>,
@@ -109,7 +110,7 @@ pub(super) fn push(
     }
     while out.len() < MAX_CARRIED {
         {
-            let motions = Motions::new(current, dt);
+            let motions = StepMotions::new(current, dt);
             ws.motions.clear();
             for c in cands.iter_mut().filter(|c| !c.done) {
                 let set = if c.swept { &fresh } else { &*front };

@@ -21,10 +21,11 @@
 //! piece's end (the centre of mass on a line, the rotation by slerp: the
 //! constant velocities rapier itself would give it over the whole step).
 
-use super::candidates::{Motions, Scene};
+use super::moved::Moved;
 use super::report::CcdReport;
-use super::select::{Moved, body_thickness};
+use super::select::body_thickness;
 use super::sweep::{self, Targets, Workspace};
+use super::world::{StageWorld, StepMotions};
 use crate::query::QueryOptions;
 use rapier3d::prelude::{
     BroadPhaseBvh, NarrowPhase, Pose, RigidBodyHandle, RigidBodySet, RigidBodyType, Rotation,
@@ -83,7 +84,7 @@ pub(crate) fn aim(bodies: &mut RigidBodySet, aims: &[Aim], share: f32) {
 /// bodies go to their target (it is `horizon` away). Fast ones are marked
 /// as after a step (`select::moved`).
 pub(crate) fn predict(
-    scene: &Scene,
+    scene: &StageWorld,
     gravity: Vector,
     aims: &[Aim],
     horizon: f64,
@@ -131,10 +132,10 @@ pub(crate) fn predict(
             + 0.5 * (accel.length() as f64) * horizon * horizon;
         // An aimed body turns the short way (its velocity is last step's).
         let (spin, angvel) = match aimed {
-            Some(_) => (super::select::angle_short(&start, &end), Vector::ZERO),
+            Some(_) => (super::moved::angle_short(&start, &end), Vector::ZERO),
             None => (w.length() as f64 * horizon, w),
         };
-        let travel = super::select::travel_bound(shift, extent, spin);
+        let travel = super::moved::travel_bound(shift, extent, spin);
         let tunnels =
             shift + extent * spin > scene.config.fast_factor * body_thickness(rb, scene.colliders);
         out.push(Moved {
@@ -158,7 +159,7 @@ pub(crate) fn predict(
 /// piece's own sweep reports it.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn first_impact(
-    scene: &Scene,
+    scene: &StageWorld,
     broad_phase: &BroadPhaseBvh,
     narrow_phase: &NarrowPhase,
     predicted: &[Moved],
@@ -171,7 +172,7 @@ pub(crate) fn first_impact(
         initial_contact: crate::InitialContact::Ignore,
         ..*opts
     };
-    let motions = Motions::new(predicted, horizon);
+    let motions = StepMotions::new(predicted, horizon);
     ws.motions.clear();
     let mut earliest: Option<f64> = None;
     let mut sensors = Vec::new();

@@ -2,14 +2,15 @@
 //! crosses before it. Every call to the time-of-impact query is in
 //! [`earliest`] and [`first_crossing`].
 
-use super::candidates::{Candidate, Motions, PairKind, Scene, gather, pair_kind, swept_aabb};
-use super::convert::pose_from_iso;
-use super::query::{QueryOptions, ShapeMotion, Toi, time_of_impact, time_of_impact_many};
+use super::candidates::{Candidate, Interaction, gather, interaction, swept_aabb};
+use super::moved::Moved;
 use super::report::CcdReport;
-use super::select::Moved;
+use super::touching::{gap_at, touching_pair};
+use super::world::{StageWorld, StepMotions};
 use crate::enclosure::TimeSpan;
 use crate::error::CcdError;
-use crate::motion::{Motion, Trajectory};
+use crate::motion::Motion;
+use crate::query::{QueryOptions, ShapeMotion, Toi, Witness, time_of_impact, time_of_impact_many};
 use crate::solve::RootStatus;
 use rapier3d::parry::query::QueryDispatcher;
 use rapier3d::parry::shape::Shape;
@@ -58,132 +59,6 @@ pub(crate) enum Targets<'a> {
 pub(crate) struct Workspace {
     candidates: Vec<Candidate>,
     pub motions: HashMap<ColliderHandle, Motion>,
-}
-
-/// Signed gap at step fraction `tau` (negative: penetration depth), with
-/// the contact there; `None` when parry cannot tell. Gaps beyond `reach`
-/// come back as `reach` (and no contact).
-fn gap_at(
-    s1: &dyn Shape,
-    m1: &Motion,
-    s2: &dyn Shape,
-    m2: &Motion,
-    tau: f64,
-    reach: f64,
-) -> Option<(f64, Option<rapier3d::parry::query::Contact>)> {
-    let p1 = pose_from_iso(&m1.pose_at(tau));
-    let p2 = pose_from_iso(&m2.pose_at(tau));
-    // parry 0.31.1 answers a convex shape against a half-space wrongly
-    // (the depth grows with the distance from the plane's origin); the
-    // half-space first is right.
-    let flip = s2.as_halfspace().is_some() && s1.as_halfspace().is_none();
-    let found = if flip {
-        rapier3d::parry::query::contact(&p2, s2, &p1, s1, reach as f32)
-            .map(|c| c.map(|c| c.flipped()))
-    } else {
-        rapier3d::parry::query::contact(&p1, s1, &p2, s2, reach as f32)
-    };
-    match found {
-        Ok(Some(c)) => Some((c.dist as f64, Some(c))),
-        Ok(None) => Some((reach, None)),
-        Err(_) => None,
-    }
-}
-
-/// Most samples a pair touching at the start takes over the step.
-const MAX_TOUCH_SAMPLES: usize = 64;
-
-/// A pair already touching (within the skin) at the start: rapier's
-/// contacts own it, unless it goes deeper than `max(start depth, sink)` or
-/// separates and comes back. Walks the step in samples fine enough that no
-/// point moves more than the sink between two (at most
-/// [`MAX_TOUCH_SAMPLES`]): at the first sample deeper than allowed the time
-/// is bisected down to the last allowed one and returned; at the first
-/// sample apart by more than the skin the sound query takes over for the
-/// rest of the step. This is parry's sampled depth, not a proof: the stage
-/// is sound for pairs apart at the start; for touching ones it only stops
-/// the solver from pushing a fast body deep.
-fn touching_pair(
-    moving: &ShapeMotion,
-    target: &ShapeMotion,
-    gap0: f64,
-    sink: f64,
-    opts: &QueryOptions,
-    report: &mut CcdReport,
-) -> Result<Option<Toi>, CcdError> {
-    let (s1, m1, s2, m2) = (moving.shape, &moving.motion, target.shape, &target.motion);
-    let allowed = (-gap0).max(sink);
-    let radius = |s: &dyn Shape| {
-        let b = s.compute_local_bounding_sphere();
-        b.center.length() as f64 + b.radius as f64
-    };
-    let travel = m1.travel_bound(radius(s1)) + m2.travel_bound(radius(s2));
-    let samples = ((travel / sink).ceil() as usize).clamp(4, MAX_TOUCH_SAMPLES);
-    // parry's contact only needs to look as far as a sample can move: a
-    // larger prediction makes it visit every mesh part within it.
-    let reach = opts.skin.max(allowed) + travel / samples as f64 + 1.0e-3;
-    let lo = opts.time_range.lo;
-    let width = opts.time_range.hi - lo;
-    let mut prev = lo;
-    for k in 1..=samples {
-        let tau = lo + width * k as f64 / samples as f64;
-        let Some((gap, _)) = gap_at(s1, m1, s2, m2, tau, reach) else {
-            return Ok(None);
-        };
-        if -gap > allowed {
-            // Deeper than allowed: the last allowed time, by bisection.
-            let (mut ok, mut bad) = (prev, tau);
-            for _ in 0..12 {
-                let mid = 0.5 * (ok + bad);
-                match gap_at(s1, m1, s2, m2, mid, reach) {
-                    Some((g, _)) if -g <= allowed => ok = mid,
-                    _ => bad = mid,
-                }
-            }
-            let (_, contact) = gap_at(s1, m1, s2, m2, ok, reach).unwrap_or((0.0, None));
-            let (w1, w2, n) = contact.map_or(
-                (
-                    m1.pose_at(ok).translation.vector,
-                    m2.pose_at(ok).translation.vector,
-                    nalgebra::Vector3::zeros(),
-                ),
-                |c| {
-                    (
-                        super::convert::vec_from_glam(c.point1),
-                        super::convert::vec_from_glam(c.point2),
-                        super::convert::vec_from_glam(c.normal1),
-                    )
-                },
-            );
-            return Ok(Some(Toi {
-                fraction: ok,
-                time: ok * m1.dt().max(m2.dt()),
-                status: RootStatus::Hit,
-                witness1: w1.into(),
-                witness2: w2.into(),
-                normal1: n,
-                stats: Default::default(),
-            }));
-        }
-        if gap > opts.skin {
-            // Apart: the sound query for the rest of the step.
-            let rest = QueryOptions {
-                time_range: TimeSpan::new(tau, opts.time_range.hi),
-                ..*opts
-            };
-            if let Some(toi) = time_of_impact(s1, m1, s2, m2, &rest)? {
-                report.evaluations += toi.stats.pair_evaluations;
-                if toi.status != RootStatus::InitiallyTouching {
-                    return Ok(Some(toi));
-                }
-                prev = tau;
-                continue;
-            }
-            return Ok(None);
-        }
-        prev = tau;
-    }
-    Ok(None)
 }
 
 /// Earliest impact of `moving` against `targets`, all pairs in one search.
@@ -265,10 +140,10 @@ pub(crate) fn first_crossing(
 /// the sensor pairs to check afterwards (pushed to `sensors`).
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn sweep_body(
-    scene: &Scene,
+    scene: &StageWorld,
     broad_phase: &BroadPhaseBvh,
     dispatcher: &dyn QueryDispatcher,
-    motions: &Motions,
+    motions: &StepMotions,
     body: &Moved,
     targets: Targets,
     opts: &QueryOptions,
@@ -336,15 +211,15 @@ pub(crate) fn sweep_body(
                 Some(m) => *m,
                 None => motions.collider(co2, scene.bodies)?,
             };
-            match c.kind {
-                PairKind::Solid => {
+            match c.interaction {
+                Interaction::Solid => {
                     solid.push(ShapeMotion {
                         shape: co2.shape(),
                         motion: motion2,
                     });
                     handles.push(c.handle);
                 }
-                PairKind::Sensor => sensors.push(SensorPair {
+                Interaction::Sensor => sensors.push(SensorPair {
                     collider1: h1,
                     collider2: c.handle,
                     motion1,
@@ -378,7 +253,7 @@ pub(crate) fn sweep_body(
 /// into the body by more than `sink` over the step: the body is pushed from
 /// the start. `reach`: how far apart counts as touching.
 pub(crate) fn pushed_at_start(
-    scene: &Scene,
+    scene: &StageWorld,
     body: &Moved,
     pusher: &Moved,
     reach: f64,
@@ -397,7 +272,10 @@ pub(crate) fn pushed_at_start(
             let Some(co2) = scene.colliders.get(h2) else {
                 continue;
             };
-            if !matches!(pair_kind(scene, h1, co1, h2, co2), Some(PairKind::Solid)) {
+            if !matches!(
+                interaction(scene, h1, co1, h2, co2),
+                Some(Interaction::Solid)
+            ) {
                 continue;
             }
             let Some(local2) = co2.position_wrt_parent() else {
@@ -406,7 +284,7 @@ pub(crate) fn pushed_at_start(
             let p1 = body.start * *local1;
             let p2 = pusher.start * *local2;
             let Ok(Some(c)) =
-                rapier3d::parry::query::contact(&p2, co2.shape(), &p1, co1.shape(), reach as f32)
+                crate::query::contact(&p2, co2.shape(), &p1, co1.shape(), reach as f32)
             else {
                 continue;
             };
@@ -417,23 +295,15 @@ pub(crate) fn pushed_at_start(
             let moved = pusher.end * pusher.start.inverse_transform_point(w);
             let drive = (moved - w).dot(c.normal1) as f64;
             if drive > sink {
-                let point = |p: rapier3d::prelude::Vector| {
-                    nalgebra::Point3::new(p.x as f64, p.y as f64, p.z as f64)
-                };
+                // The contact was asked pusher first: flip it to the body's side.
                 return Some(BodyHit {
-                    toi: Toi {
-                        fraction: 0.0,
-                        time: 0.0,
-                        status: RootStatus::InitiallyTouching,
-                        witness1: point(c.point2),
-                        witness2: point(c.point1),
-                        normal1: nalgebra::Vector3::new(
-                            -c.normal1.x as f64,
-                            -c.normal1.y as f64,
-                            -c.normal1.z as f64,
-                        ),
-                        stats: Default::default(),
-                    },
+                    toi: Toi::new(
+                        0.0,
+                        0.0,
+                        RootStatus::InitiallyTouching,
+                        Witness::of(&c.flipped()),
+                        Default::default(),
+                    ),
                     collider1: h1,
                     collider2: h2,
                 });

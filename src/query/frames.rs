@@ -1,0 +1,127 @@
+//! The frames a search reads poses from: one per moving shape, plus one per
+//! compound part met during the search (a frame fixed to its parent at a
+//! local pose). Each frame's pose is enclosed once per node, on first use,
+//! for every pair that reads it; so are the relative poses composite pairs
+//! read.
+
+use crate::enclosure::{Enclosure, TimeSpan};
+use crate::motion::{Motion, Pose, Trajectory};
+use nalgebra::{Isometry3, Matrix3, Vector3};
+use std::collections::HashMap;
+
+/// A frame of the search: a body's motion, or a frame fixed to another at
+/// a local pose (a compound's part).
+pub(super) struct FrameDef {
+    pub motion: Motion,
+    /// The parent frame and this frame's rotation and origin in it.
+    pub parent: Option<(u32, Matrix3<f64>, Vector3<f64>)>,
+}
+
+impl FrameDef {
+    pub fn root(motion: Motion) -> FrameDef {
+        FrameDef {
+            motion,
+            parent: None,
+        }
+    }
+}
+
+/// The frame tree of one query and its per-node pose cache.
+pub(super) struct Frames<E: Enclosure> {
+    defs: Vec<FrameDef>,
+    poses: Vec<Option<Pose<E>>>,
+    /// Per frame: does any pair read its rotation? (Balls read only their
+    /// origin, which saves enclosing a rotating matrix per node.)
+    rotation_read: Vec<bool>,
+    /// (parent frame, part index) → the part's frame.
+    child_frames: HashMap<(u32, u32), u32>,
+    /// `(to, from, pose of from in to)` for this node.
+    relative: Vec<(u32, u32, Pose<E>)>,
+}
+
+impl<E: Enclosure> Frames<E> {
+    pub fn new(defs: Vec<FrameDef>, rotation_read: Vec<bool>) -> Frames<E> {
+        Frames {
+            poses: vec![None; defs.len()],
+            defs,
+            rotation_read,
+            child_frames: HashMap::new(),
+            relative: Vec::new(),
+        }
+    }
+
+    pub fn motion(&self, index: u32) -> &Motion {
+        &self.defs[index as usize].motion
+    }
+
+    /// Forgets the poses of the last node; a fixed frame's pose is the same
+    /// on every node and is kept.
+    pub fn begin_node(&mut self) {
+        for (pose, frame) in self.poses.iter_mut().zip(&self.defs) {
+            if !frame.motion.is_fixed() {
+                *pose = None;
+            }
+        }
+        self.relative.clear();
+    }
+
+    /// The enclosed pose of frame `index` over the node `span`.
+    pub fn pose(&mut self, index: u32, span: TimeSpan) -> Pose<E> {
+        let i = index as usize;
+        if let Some(p) = self.poses[i] {
+            return p;
+        }
+        let pose = match self.defs[i].parent {
+            None if !self.rotation_read[i] => {
+                // Only the origin is read: the rotation stays at its start.
+                let motion = &self.defs[i].motion;
+                let mut pose = Pose::constant(&motion.start_rotation_matrix(), &Vector3::zeros());
+                pose.translation = motion.origin(span);
+                pose
+            }
+            None => self.defs[i].motion.pose(span),
+            Some((parent, rotation, origin)) => {
+                let p = self.pose(parent, span);
+                Pose {
+                    rotation: Matrix3::from_fn(|r, c| {
+                        p.rotation[(r, 0)] * rotation[(0, c)]
+                            + p.rotation[(r, 1)] * rotation[(1, c)]
+                            + p.rotation[(r, 2)] * rotation[(2, c)]
+                    }),
+                    translation: p.transform_point(&origin),
+                }
+            }
+        };
+        self.poses[i] = Some(pose);
+        pose
+    }
+
+    /// The pose of frame `from` in frame `to`'s coordinates over the node.
+    pub fn relative(&mut self, to: u32, from: u32, span: TimeSpan) -> Pose<E> {
+        if let Some((_, _, p)) = self.relative.iter().find(|r| r.0 == to && r.1 == from) {
+            return *p;
+        }
+        let (pt, pf) = (self.pose(to, span), self.pose(from, span));
+        let rel = pt.relative(&pf);
+        self.relative.push((to, from, rel));
+        rel
+    }
+
+    /// The frame of part `index` of a compound in frame `parent`.
+    pub fn child(&mut self, parent: u32, index: u32, local: &Isometry3<f64>) -> u32 {
+        if let Some(&f) = self.child_frames.get(&(parent, index)) {
+            return f;
+        }
+        let motion = self.defs[parent as usize].motion.with_local_frame(local);
+        let rotation = *local.rotation.to_rotation_matrix().matrix();
+        let id = self.defs.len() as u32;
+        self.defs.push(FrameDef {
+            motion,
+            parent: Some((parent, rotation, local.translation.vector)),
+        });
+        self.poses.push(None);
+        self.rotation_read.push(true);
+        self.child_frames.insert((parent, index), id);
+        id
+    }
+}

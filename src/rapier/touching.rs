@@ -1,0 +1,119 @@
+//! A pair already touching (within the skin) at the start of the step:
+//! rapier's contacts own it, unless the motion drives it deeper than
+//! allowed. Sampled with parry's contact, not proved (see [`touching_pair`]).
+
+use super::report::CcdReport;
+use crate::convert::pose_from_iso;
+use crate::enclosure::TimeSpan;
+use crate::error::CcdError;
+use crate::motion::{Motion, Trajectory};
+use crate::query::{QueryOptions, ShapeMotion, Toi, Witness, contact, time_of_impact};
+use crate::solve::RootStatus;
+use rapier3d::parry::query::Contact;
+use rapier3d::parry::shape::Shape;
+
+/// Signed gap at step fraction `tau` (negative: penetration depth), with
+/// the contact there; `None` when parry cannot tell. Gaps beyond `reach`
+/// come back as `reach` (and no contact).
+pub(super) fn gap_at(
+    s1: &dyn Shape,
+    m1: &Motion,
+    s2: &dyn Shape,
+    m2: &Motion,
+    tau: f64,
+    reach: f64,
+) -> Option<(f64, Option<Contact>)> {
+    let p1 = pose_from_iso(&m1.pose_at(tau));
+    let p2 = pose_from_iso(&m2.pose_at(tau));
+    let found = contact(&p1, s1, &p2, s2, reach as f32);
+    match found {
+        Ok(Some(c)) => Some((c.dist as f64, Some(c))),
+        Ok(None) => Some((reach, None)),
+        Err(_) => None,
+    }
+}
+
+/// Most samples a pair touching at the start takes over the step.
+const MAX_TOUCH_SAMPLES: usize = 64;
+
+/// A pair already touching (within the skin) at the start: rapier's
+/// contacts own it, unless it goes deeper than `max(start depth, sink)` or
+/// separates and comes back. Walks the step in samples fine enough that no
+/// point moves more than the sink between two (at most
+/// [`MAX_TOUCH_SAMPLES`]): at the first sample deeper than allowed the time
+/// is bisected down to the last allowed one and returned; at the first
+/// sample apart by more than the skin the sound query takes over for the
+/// rest of the step. This is parry's sampled depth, not a proof: the stage
+/// is sound for pairs apart at the start; for touching ones it only stops
+/// the solver from pushing a fast body deep.
+pub(super) fn touching_pair(
+    moving: &ShapeMotion,
+    target: &ShapeMotion,
+    gap0: f64,
+    sink: f64,
+    opts: &QueryOptions,
+    report: &mut CcdReport,
+) -> Result<Option<Toi>, CcdError> {
+    let (s1, m1, s2, m2) = (moving.shape, &moving.motion, target.shape, &target.motion);
+    let allowed = (-gap0).max(sink);
+    let radius = |s: &dyn Shape| {
+        let b = s.compute_local_bounding_sphere();
+        b.center.length() as f64 + b.radius as f64
+    };
+    let travel = m1.travel_bound(radius(s1)) + m2.travel_bound(radius(s2));
+    let samples = ((travel / sink).ceil() as usize).clamp(4, MAX_TOUCH_SAMPLES);
+    // parry's contact only needs to look as far as a sample can move: a
+    // larger prediction makes it visit every mesh part within it.
+    let reach = opts.skin.max(allowed) + travel / samples as f64 + 1.0e-3;
+    let lo = opts.time_range.lo;
+    let width = opts.time_range.hi - lo;
+    let mut prev = lo;
+    for k in 1..=samples {
+        let tau = lo + width * k as f64 / samples as f64;
+        let Some((gap, _)) = gap_at(s1, m1, s2, m2, tau, reach) else {
+            return Ok(None);
+        };
+        if -gap > allowed {
+            // Deeper than allowed: the last allowed time, by bisection.
+            let (mut ok, mut bad) = (prev, tau);
+            for _ in 0..12 {
+                let mid = 0.5 * (ok + bad);
+                match gap_at(s1, m1, s2, m2, mid, reach) {
+                    Some((g, _)) if -g <= allowed => ok = mid,
+                    _ => bad = mid,
+                }
+            }
+            let (_, found) = gap_at(s1, m1, s2, m2, ok, reach).unwrap_or((0.0, None));
+            let witness = found.map_or_else(
+                || Witness::origins(&m1.pose_at(ok), &m2.pose_at(ok)),
+                |c| Witness::of(&c),
+            );
+            let dt = m1.dt().max(m2.dt());
+            return Ok(Some(Toi::new(
+                ok,
+                dt,
+                RootStatus::Hit,
+                witness,
+                Default::default(),
+            )));
+        }
+        if gap > opts.skin {
+            // Apart: the sound query for the rest of the step.
+            let rest = QueryOptions {
+                time_range: TimeSpan::new(tau, opts.time_range.hi),
+                ..*opts
+            };
+            if let Some(toi) = time_of_impact(s1, m1, s2, m2, &rest)? {
+                report.evaluations += toi.stats.pair_evaluations;
+                if toi.status != RootStatus::InitiallyTouching {
+                    return Ok(Some(toi));
+                }
+                prev = tau;
+                continue;
+            }
+            return Ok(None);
+        }
+        prev = tau;
+    }
+    Ok(None)
+}

@@ -1,0 +1,76 @@
+//! What the stage reads of the world during one step: the rapier sets and
+//! the user's hooks ([`StageWorld`]), and the moved bodies' motions by handle
+//! ([`StepMotions`]).
+
+use super::config::CcdConfig;
+use super::moved::Moved;
+use crate::convert::{iso_from_pose, point_from_glam, vec_from_glam};
+use crate::error::CcdError;
+use crate::motion::Motion;
+use rapier3d::prelude::{
+    Collider, ColliderSet, ImpulseJointSet, PhysicsHooks, RigidBodyHandle, RigidBodySet, Vector,
+};
+use std::collections::HashMap;
+
+/// Everything the pair rules read.
+pub(crate) struct StageWorld<'a> {
+    pub bodies: &'a RigidBodySet,
+    pub colliders: &'a ColliderSet,
+    pub joints: &'a ImpulseJointSet,
+    pub hooks: &'a dyn PhysicsHooks,
+    pub config: &'a CcdConfig,
+}
+
+/// The moved bodies of this step, by handle, and the step length.
+pub(crate) struct StepMotions<'a> {
+    pub moved: &'a [Moved],
+    pub index: HashMap<RigidBodyHandle, usize>,
+    pub dt: f64,
+    /// Largest travel of any moved body, metres.
+    pub margin: f64,
+}
+
+impl<'a> StepMotions<'a> {
+    pub fn new(moved: &'a [Moved], dt: f64) -> StepMotions<'a> {
+        StepMotions {
+            moved,
+            index: moved
+                .iter()
+                .enumerate()
+                .map(|(i, m)| (m.handle, i))
+                .collect(),
+            dt,
+            margin: moved.iter().map(|m| m.travel).fold(0.0, f64::max),
+        }
+    }
+
+    pub fn body(&self, handle: RigidBodyHandle) -> Option<&Moved> {
+        self.index.get(&handle).map(|i| &self.moved[*i])
+    }
+
+    /// A collider's motion over the step: its body's, or none.
+    pub fn collider(&self, co: &Collider, bodies: &RigidBodySet) -> Result<Motion, CcdError> {
+        let moved = co.parent().and_then(|h| self.body(h));
+        match (
+            moved,
+            co.position_wrt_parent(),
+            co.parent().and_then(|h| bodies.get(h)),
+        ) {
+            (Some(m), Some(local), Some(rb)) => {
+                let motion = Motion::from_poses(
+                    iso_from_pose(&(m.start * *local)),
+                    iso_from_pose(&(m.end * *local)),
+                    point_from_glam(local.inverse_transform_point(rb.local_center_of_mass())),
+                    self.dt,
+                    vec_from_glam(m.angvel),
+                )?;
+                if m.accel == Vector::ZERO {
+                    Ok(motion)
+                } else {
+                    motion.with_acceleration(vec_from_glam(m.accel))
+                }
+            }
+            _ => Motion::fixed(iso_from_pose(co.position())),
+        }
+    }
+}
