@@ -900,7 +900,7 @@ fn writeup_sine_series() {
     let (m, h) = span.center_radius();
     assert!(m == 0.0 && (h - 1.0).abs() <= 1e-15, "m = {m}, h = {h}");
     let s = (Taylor3::time(span) * 0.1 + 2.0).sin();
-    // The write-up's numbers (signs corrected, DESIGN.md), and the exact
+    // The write-up's numbers (signs corrected, docs/design.md §1), and the exact
     // Taylor coefficients f⁽ᵏ⁾(0)/k! of sin(2 + 0.1τ).
     let writeup = [
         0.909297426826,
