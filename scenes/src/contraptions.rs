@@ -18,6 +18,7 @@ pub fn scenes() -> Vec<Scene> {
         restitution: true,
         friction: true,
         kinematic: false,
+        settles: false,
     };
     vec![
         Scene {

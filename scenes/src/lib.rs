@@ -60,6 +60,9 @@ pub struct Effects {
     pub friction: bool,
     /// Kinematic bodies are driven by scripts.
     pub kinematic: bool,
+    /// The bodies come to rest, each on its own (no pile, no chain of
+    /// collisions): their final poses can be compared with rapier's.
+    pub settles: bool,
 }
 
 /// What the builder hands back besides the filled world.
