@@ -12,9 +12,13 @@ use crate::query::QueryOptions;
 use rapier3d::parry::query::{DefaultQueryDispatcher, QueryDispatcher};
 use rapier3d::parry::shape::Shape;
 use rapier3d::prelude::{
-    ColliderSet, CollisionEvent, CollisionEventFlags, EventHandler, RigidBodySet,
+    ColliderSet, CollisionEvent, CollisionEventFlags, EventHandler, RigidBodySet, Vector,
 };
 use std::collections::HashMap;
+
+/// A clamp that keeps at most this share of the body's motion holds it
+/// where it started.
+const HELD: f64 = 1.0e-3;
 
 /// Clamps the hit bodies, then reports the sensors crossed before each
 /// body's stop.
@@ -33,6 +37,16 @@ pub(crate) fn apply(
         clamp::clamp(bodies, body);
         if let (Some(v), Some(rb)) = (plan.velocity[*i], bodies.get_mut(body.handle)) {
             rb.set_linvel(v, true);
+        } else if plan.held[*i]
+            && plan.scale[*i] <= HELD
+            && let Some(rb) = bodies.get_mut(body.handle)
+        {
+            // Held where it started by a pair touching at the start: its
+            // velocity would only drive it into the same hold next step
+            // while gravity and the solver pile more on. It stops; the next
+            // step's contacts go on from rest.
+            rb.set_linvel(Vector::ZERO, true);
+            rb.set_angvel(Vector::ZERO, true);
         }
         let fraction = plan.scale[*i];
         stops.insert(body.handle, fraction);

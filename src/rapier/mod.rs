@@ -31,6 +31,7 @@
 
 // The phases of one step, in the order the data passes through them.
 mod apply; // the plan written back to the world
+mod backoff; // where a clamp stands: a little before the true contact
 mod candidates; // what a fast collider may meet (broad phase, pair rules)
 mod clamp; // cut and carried motions
 mod moved; // a moved body's two poses and travel bounds

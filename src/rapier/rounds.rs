@@ -26,6 +26,9 @@ pub(crate) struct Plan {
     pub velocity: Vec<Option<Vector>>,
     /// Index into `moved` of each clamped body, and its last impact.
     pub hits: Vec<(usize, sweep::BodyHit)>,
+    /// Per moved body, whether some round clamped it for a pair touching at
+    /// the start (a later round's hit may be another pair's).
+    pub held: Vec<bool>,
     pub sensors: Vec<SensorPair>,
 }
 
@@ -116,6 +119,7 @@ struct Rounds {
     scale: Vec<f64>,
     velocity: Vec<Option<Vector>>,
     last: Vec<Option<sweep::BodyHit>>,
+    held: Vec<bool>,
     /// Fast kinematic bodies and what they carry.
     pushing: HashSet<RigidBodyHandle>,
     carried: HashSet<RigidBodyHandle>,
@@ -135,6 +139,7 @@ impl Rounds {
             scale: vec![1.0; n],
             velocity: vec![None; n],
             last: vec![None; n],
+            held: vec![false; n],
             pushing: moved
                 .iter()
                 .filter(|m| m.pusher)
@@ -175,6 +180,7 @@ impl Rounds {
             self.scale.resize(n, 1.0);
             self.velocity.resize(n, None);
             self.last.resize(n, None);
+            self.held.resize(n, false);
             for (i, hit, v) in pushed {
                 self.velocity[i] = Some(v);
                 self.last[i] = Some(hit);
@@ -292,6 +298,7 @@ impl Rounds {
                     }
                 },
             }
+            self.held[i] |= hit.touching;
             self.last[i] = Some(hit);
             self.changed.push(i);
             self.changed_set.insert(handle);
@@ -355,6 +362,7 @@ impl Rounds {
             scale: self.scale,
             velocity: self.velocity,
             hits,
+            held: self.held,
             sensors: self.sensors,
         }
     }

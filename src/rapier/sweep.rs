@@ -2,6 +2,7 @@
 //! crosses before it. Every call to the time-of-impact query is in
 //! [`earliest`] and [`first_crossing`].
 
+use super::backoff::{BACKOFF, back_off, pair_travel};
 use super::candidates::{Candidate, Interaction, gather, interaction, swept_aabb};
 use super::moved::Moved;
 use super::report::CcdReport;
@@ -24,6 +25,8 @@ pub(crate) struct BodyHit {
     pub toi: Toi,
     pub collider1: ColliderHandle,
     pub collider2: ColliderHandle,
+    /// The pair was already touching at the start (`touching_pair`).
+    pub touching: bool,
 }
 
 /// A sensor pair the body's sweep may cross, checked once the body's own
@@ -61,28 +64,66 @@ pub(crate) struct Workspace {
     pub motions: HashMap<ColliderHandle, Motion>,
 }
 
+/// The earliest impact of one collider: when, against which target, and
+/// whether that pair was touching at the start.
+struct Earliest {
+    toi: Toi,
+    target: usize,
+    touching: bool,
+}
+
 /// Earliest impact of `moving` against `targets`, all pairs in one search.
 ///
-/// A pair already within the skin at the start is taken out of the joint
-/// search and handed to [`touching_pair`]: rapier's contacts own it unless
-/// it goes deeper than `max(start depth, sink)` or separates and comes
-/// back (rapier's `stop_at_penetration = false`: a touching pair counts
-/// only when the motion makes it deeper). An impact at τ = 0 for every
-/// touching pair would freeze a body resting or sliding on the ground.
+/// A pair within the skin at the start (parry's gap) belongs to rapier's
+/// contacts, whose speculative contacts see it: it is left out of the
+/// joint search and handed to [`touching_pair`], which steps in only when
+/// the motion drives it deeper than `max(start depth, sink)` or it
+/// separates and comes back (rapier's `stop_at_penetration = false`). An
+/// impact at τ = 0 for every touching pair would freeze a body resting or
+/// sliding on the ground.
+///
+/// The others are searched together at **zero skin**: an impact is the
+/// true contact, backed off along the motion (see `backoff`). A near miss
+/// (a ball passing an edge within the skin) is no impact.
 fn earliest(
     moving: &ShapeMotion,
     targets: &[ShapeMotion],
     opts: &QueryOptions,
     sink: f64,
     report: &mut CcdReport,
-) -> Result<Option<(Toi, usize)>, CcdError> {
-    let mut alive: Vec<usize> = (0..targets.len()).collect();
-    let mut best: Option<(Toi, usize)> = None;
-    let keep = |toi: Toi, j: usize, best: &mut Option<(Toi, usize)>| {
-        if best.is_none_or(|(b, _)| toi.fraction < b.fraction) {
-            *best = Some((toi, j));
+) -> Result<Option<Earliest>, CcdError> {
+    let mut best: Option<Earliest> = None;
+    let mut keep = |found: Earliest| {
+        if best
+            .as_ref()
+            .is_none_or(|b| found.toi.fraction < b.toi.fraction)
+        {
+            best = Some(found);
         }
     };
+    let lo = opts.time_range.lo;
+    // A small prediction finds the contact of a pair within the skin.
+    let reach = opts.skin + 1.0e-2;
+    let touching = |j: usize, gap: f64, report: &mut CcdReport| {
+        report.pairs_touching_at_start += 1;
+        touching_pair(moving, &targets[j], gap, sink, opts, report)
+    };
+    let mut alive: Vec<usize> = Vec::with_capacity(targets.len());
+    for (j, t) in targets.iter().enumerate() {
+        match gap_at(moving.shape, &moving.motion, t.shape, &t.motion, lo, reach) {
+            Some((gap, _)) if gap <= opts.skin => {
+                if let Some(toi) = touching(j, gap, report)? {
+                    keep(Earliest {
+                        toi,
+                        target: j,
+                        touching: true,
+                    });
+                }
+            }
+            _ => alive.push(j),
+        }
+    }
+    let contact = QueryOptions { skin: 0.0, ..*opts };
     while !alive.is_empty() {
         let set: Vec<ShapeMotion> = alive
             .iter()
@@ -91,27 +132,32 @@ fn earliest(
                 motion: targets[j].motion,
             })
             .collect();
-        let found = time_of_impact_many(std::slice::from_ref(moving), &set, opts)?;
+        let found = time_of_impact_many(std::slice::from_ref(moving), &set, &contact)?;
         let Some(many) = found else { break };
         report.evaluations += many.toi.stats.pair_evaluations;
         let j = alive[many.target];
+        let t = &targets[j];
         if many.toi.status != RootStatus::InitiallyTouching {
-            keep(many.toi, j, &mut best);
+            let travel = pair_travel(moving.shape, &moving.motion, t.shape, &t.motion);
+            keep(Earliest {
+                toi: back_off(many.toi, travel, BACKOFF * opts.skin, lo),
+                target: j,
+                touching: false,
+            });
             break;
         }
-        report.pairs_touching_at_start += 1;
+        // The pair touches at the start after all (parry saw it apart).
         alive.remove(many.target);
-        let t = &targets[j];
-        // The pair is within the skin at the start: a small prediction
-        // finds its contact.
-        let reach = opts.skin + 1.0e-2;
-        let lo = opts.time_range.lo;
         let Some((gap, _)) = gap_at(moving.shape, &moving.motion, t.shape, &t.motion, lo, reach)
         else {
             continue;
         };
-        if let Some(toi) = touching_pair(moving, t, gap, sink, opts, report)? {
-            keep(toi, j, &mut best);
+        if let Some(toi) = touching(j, gap, report)? {
+            keep(Earliest {
+                toi,
+                target: j,
+                touching: true,
+            });
         }
     }
     Ok(best)
@@ -235,12 +281,13 @@ pub(crate) fn sweep_body(
             shape: co1.shape(),
             motion: motion1,
         };
-        if let Some((toi, j)) = earliest(&moving, &solid, opts, scene.config.sink, report)? {
-            if best.is_none_or(|b| toi.fraction < b.toi.fraction) {
+        if let Some(e) = earliest(&moving, &solid, opts, scene.config.sink, report)? {
+            if best.is_none_or(|b| e.toi.fraction < b.toi.fraction) {
                 best = Some(BodyHit {
-                    toi,
+                    toi: e.toi,
                     collider1: h1,
-                    collider2: handles[j],
+                    collider2: handles[e.target],
+                    touching: e.touching,
                 });
             }
         }
@@ -306,6 +353,7 @@ pub(crate) fn pushed_at_start(
                     ),
                     collider1: h1,
                     collider2: h2,
+                    touching: false,
                 });
             }
         }

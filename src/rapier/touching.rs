@@ -2,6 +2,7 @@
 //! rapier's contacts own it, unless the motion drives it deeper than
 //! allowed. Sampled with parry's contact, not proved (see [`touching_pair`]).
 
+use super::backoff::{BACKOFF, back_off, pair_travel};
 use super::report::CcdReport;
 use crate::convert::pose_from_iso;
 use crate::enclosure::TimeSpan;
@@ -56,11 +57,7 @@ pub(super) fn touching_pair(
 ) -> Result<Option<Toi>, CcdError> {
     let (s1, m1, s2, m2) = (moving.shape, &moving.motion, target.shape, &target.motion);
     let allowed = (-gap0).max(sink);
-    let radius = |s: &dyn Shape| {
-        let b = s.compute_local_bounding_sphere();
-        b.center.length() as f64 + b.radius as f64
-    };
-    let travel = m1.travel_bound(radius(s1)) + m2.travel_bound(radius(s2));
+    let travel = pair_travel(s1, m1, s2, m2);
     let samples = ((travel / sink).ceil() as usize).clamp(4, MAX_TOUCH_SAMPLES);
     // parry's contact only needs to look as far as a sample can move: a
     // larger prediction makes it visit every mesh part within it.
@@ -99,14 +96,16 @@ pub(super) fn touching_pair(
         }
         if gap > opts.skin {
             // Apart: the sound query for the rest of the step.
+            // Hits are the true contact (zero skin), backed off.
             let rest = QueryOptions {
                 time_range: TimeSpan::new(tau, opts.time_range.hi),
+                skin: 0.0,
                 ..*opts
             };
             if let Some(toi) = time_of_impact(s1, m1, s2, m2, &rest)? {
                 report.evaluations += toi.stats.pair_evaluations;
                 if toi.status != RootStatus::InitiallyTouching {
-                    return Ok(Some(toi));
+                    return Ok(Some(back_off(toi, travel, BACKOFF * opts.skin, tau)));
                 }
                 prev = tau;
                 continue;
