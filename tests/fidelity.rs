@@ -169,7 +169,10 @@ fn a_near_miss_keeps_its_velocity_and_a_shallow_hit_changes_it_as_a_contact_woul
             "x0 {x0}: +1e-4 m: affine {miss:.2e}, rapier {miss_rapier:.2e} m/s; \
              -1e-4 m: affine {hit:.3}, rapier {hit_rapier:.3} m/s (limit {limit:.2})"
         );
-        assert!(miss <= 1.0e-6, "x0 {x0}: a near miss 1e-4 m clear changed by {miss} m/s");
+        assert!(
+            miss <= 1.0e-6,
+            "x0 {x0}: a near miss 1e-4 m clear changed by {miss} m/s"
+        );
         assert!(
             hit > 0.0 && hit <= limit,
             "x0 {x0}: a 1e-4 m deep graze changed by {hit} m/s (limit {limit})"

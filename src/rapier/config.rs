@@ -45,10 +45,13 @@ pub struct CcdConfig {
     /// Accuracy of each time of impact, a fraction of the step: a clamp
     /// lands at most this much before the true contact.
     pub epsilon: f64,
-    /// Metres left between a clamped body and what it hit. Used as
-    /// `min(skin, ½·prediction distance)` so the next step's speculative
-    /// contacts see the pair (rapier's prediction distance is 2 mm by
-    /// default).
+    /// Metres: the band within which a pair counts as touching at the start
+    /// of a step (rapier's contacts own it then), and ten times the distance
+    /// a clamp backs off from the true contact along the motion. A hit is
+    /// always the true contact (zero distance): a shape that passes within
+    /// the skin of something without touching it is not clamped. Used as
+    /// `min(skin, ½·prediction distance)`; rapier's prediction distance is
+    /// 2 cm by default.
     pub skin: f64,
     /// Metres a fast body touching something at the start of a step may
     /// sink into it during the step (beyond its start depth) before the

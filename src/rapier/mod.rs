@@ -17,11 +17,13 @@
 //! the stage wraps the step: record the poses, let rapier step (its CCD
 //! off), then sweep the bodies that moved fast enough to tunnel from their
 //! old to their new pose and put each back to its pose just before its
-//! first impact (velocities kept). A step without fast bodies touches
-//! nothing. After a clamp, what it changed is swept again against the cut
-//! motions (see `rounds`). A pair already touching at the start is
-//! rapier's contacts' unless it goes deeper than `CcdConfig::sink`
-//! (sampled, see `sweep::touching_pair`). Fast kinematic bodies (rapier
+//! first true contact (velocities kept; see `backoff`): a body that passes
+//! close to something without touching it is left alone. A step without
+//! fast bodies touches nothing. After a clamp, what it changed is swept
+//! again against the cut motions (see `rounds`). A pair already within the
+//! skin at the start is rapier's contacts' unless it goes deeper than
+//! `CcdConfig::sink` (sampled, see `touching`); a body such a pair holds
+//! where it started stops, so no velocity piles up in a body held still. Fast kinematic bodies (rapier
 //! never sweeps them) push the dynamic bodies they would pass, in time
 //! order: each is carried from its time of impact, ends a skin ahead of its
 //! pusher with the pusher's velocity, and pushes in turn what it meets (see
