@@ -150,12 +150,41 @@ pub struct Energy {
 /// (`g` the world's gravity, `s` each body's gravity scale, `c` its centre
 /// of mass), in `f64`.
 pub fn mechanical_energy(snapshot: &Snapshot, gravity: Vector) -> Energy {
-    let g = vec_from_glam(gravity);
     let mut energy = Energy::default();
     for state in snapshot.bodies.values() {
-        if state.body_type != RigidBodyType::Dynamic {
-            continue;
+        if state.body_type == RigidBodyType::Dynamic {
+            energy.add(state, gravity);
         }
+    }
+    energy
+}
+
+/// The energies before and after one step, summed over the same bodies:
+/// those dynamic at both ends whose mass and inertia were known at both
+/// ends. Rapier computes a new body's mass properties during its first
+/// step, so before the first step a body reads mass 0: counting it would
+/// make its whole energy look like a rise.
+pub fn step_energies(before: &Snapshot, after: &Snapshot, gravity: Vector) -> (Energy, Energy) {
+    let (mut e0, mut e1) = (Energy::default(), Energy::default());
+    for (handle, end) in &after.bodies {
+        let Some(start) = before.bodies.get(handle) else {
+            continue;
+        };
+        let dynamic =
+            start.body_type == RigidBodyType::Dynamic && end.body_type == RigidBodyType::Dynamic;
+        let known = start.mass == end.mass && start.inertia.is_zero() == end.inertia.is_zero();
+        if dynamic && known {
+            e0.add(start, gravity);
+            e1.add(end, gravity);
+        }
+    }
+    (e0, e1)
+}
+
+impl Energy {
+    /// Adds one body's kinetic and potential energy.
+    fn add(&mut self, state: &BodyState, gravity: Vector) {
+        let g = vec_from_glam(gravity);
         let m = f64::from(state.mass);
         let v = vec_from_glam(state.linvel);
         let w = vec_from_glam(state.angvel);
@@ -170,10 +199,9 @@ pub fn mechanical_energy(snapshot: &Snapshot, gravity: Vector) -> Energy {
         let kinetic = 0.5 * m * v.norm_squared() + 0.5 * iw_w;
         let c = vec_from_glam(state.com());
         let potential = -m * f64::from(state.gravity_scale) * g.dot(&c);
-        energy.kinetic += kinetic;
-        energy.total += kinetic + potential;
+        self.kinetic += kinetic;
+        self.total += kinetic + potential;
     }
-    energy
 }
 
 /// The largest rise of the mechanical energy over one step, and the scale.
@@ -244,6 +272,18 @@ pub fn deflected(
     before: &Snapshot,
     after: &Snapshot,
 ) -> Vec<RigidBodyHandle> {
+    deflected_within(world, before, after, 0.0)
+}
+
+/// [`deflected`], with "touches" meaning "comes within `skin` metres"
+/// (e.g. rapier's prediction distance, to leave out the impulses of its
+/// speculative contacts, which act at small positive gaps).
+pub fn deflected_within(
+    world: &PhysicsWorld,
+    before: &Snapshot,
+    after: &Snapshot,
+    skin: Real,
+) -> Vec<RigidBodyHandle> {
     let dt = world.integration_parameters.dt;
     let mut found = Vec::new();
     for (handle, body) in world.bodies.iter() {
@@ -273,7 +313,7 @@ pub fn deflected(
         if !velocity_changed(start, end, world.gravity, dt) {
             continue;
         }
-        if free_path_is_clear(world, before, handle) {
+        if free_path_is_clear(world, before, handle, skin) {
             found.push(handle);
         }
     }
@@ -365,13 +405,18 @@ fn swept_box(collider: &Collider, pose0: &Pose, motion: &Motion) -> Option<Aabb>
 }
 
 /// Whether the free path of `body` over the step provably stays apart
-/// (gap > 0) from every collider it may collide with. Fixed colliders stay
+/// (gap > `skin`, 0 for [`deflected`]) from every collider it may collide with. Fixed colliders stay
 /// at their start poses; colliders of other dynamic bodies are taken along
 /// both their free path and the path they actually took; kinematic ones
 /// along the path they took. Candidates come from swept boxes; the test
 /// itself is `affine_ccd`'s sound query with zero skin. Any reported hit,
 /// error, unsupported pair or non-finite state means "not clear".
-pub fn free_path_is_clear(world: &PhysicsWorld, before: &Snapshot, body: RigidBodyHandle) -> bool {
+pub fn free_path_is_clear(
+    world: &PhysicsWorld,
+    before: &Snapshot,
+    body: RigidBodyHandle,
+    skin: Real,
+) -> bool {
     let dt = world.integration_parameters.dt;
     let Some((rb, state)) = world.bodies.get(body).zip(before.bodies.get(&body)) else {
         return false;
@@ -392,7 +437,7 @@ pub fn free_path_is_clear(world: &PhysicsWorld, before: &Snapshot, body: RigidBo
     }
     let Some(reach) = own
         .iter()
-        .map(|(_, _, p)| p.swept)
+        .map(|(_, _, p)| p.swept.loosened(skin.max(0.0)))
         .reduce(|a, b| a.merged(&b))
     else {
         return true;
@@ -469,7 +514,7 @@ pub fn free_path_is_clear(world: &PhysicsWorld, before: &Snapshot, body: RigidBo
         })
         .collect();
     let options = QueryOptions {
-        skin: 0.0,
+        skin: f64::from(skin),
         ..QueryOptions::default()
     };
     matches!(time_of_impact_many(&moving, &targets, &options), Ok(None))

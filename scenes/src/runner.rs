@@ -156,10 +156,8 @@ pub fn run_scene(
         frozen.check_step(&before, &after);
         deflected += fidelity::deflected(&world, &before, &after).len();
         if closed {
-            energy.observe_step(
-                fidelity::mechanical_energy(&before, world.gravity),
-                fidelity::mechanical_energy(&after, world.gravity),
-            );
+            let (e0, e1) = fidelity::step_energies(&before, &after, world.gravity);
+            energy.observe_step(e0, e1);
         }
         if let Some(trace) = &mut trace {
             trace.record(&world);
