@@ -46,12 +46,14 @@ pub const HELD_ANGVEL: Real = 1.0;
 pub const HELD_RUN: usize = 10;
 
 /// Whether a dynamic body was held over one step: its pose barely changed
-/// although its velocity at the end of the step says it moves. NaN anywhere
-/// gives `false`.
+/// although its velocity at the end of the step says it moves. A non-finite
+/// pose or velocity says nothing: `false`.
 pub fn is_held(before: &BodyState, after: &BodyState) -> bool {
     let moved = (after.com() - before.com()).length();
     let turned = before.pose.rotation.angle_between(after.pose.rotation);
-    let fast = after.linvel.length() > HELD_LINVEL || after.angvel.length() > HELD_ANGVEL;
+    let finite = after.linvel.is_finite() && after.angvel.is_finite();
+    let fast =
+        finite && (after.linvel.length() > HELD_LINVEL || after.angvel.length() > HELD_ANGVEL);
     moved < HELD_MOVE && turned < HELD_TURN && fast
 }
 
@@ -668,5 +670,34 @@ mod tests {
             let snap = Snapshot::take(&world);
             assert!(deflected(&world, &snap, &snap).is_empty());
         }
+    }
+
+    #[test]
+    fn nan_velocities_count_nothing_and_do_not_panic() {
+        let (mut world, ball) = ball_world(true);
+        let before = Snapshot::take(&world);
+        if let Some(rb) = world.bodies.get_mut(ball) {
+            rb.set_linvel(Vector::new(Real::NAN, 0.0, 0.0), true);
+            rb.set_angvel(Vector::new(0.0, Real::INFINITY, 0.0), true);
+        }
+        let after = Snapshot::take(&world);
+        // NaN at the end: the wall is in the free path, "not clear"; NaN
+        // at the start: the query refuses the motion, "not clear" too.
+        assert!(deflected(&world, &before, &after).is_empty());
+        assert!(deflected(&world, &after, &after).is_empty());
+        let mut frozen = FrozenCounter::default();
+        for _ in 0..20 {
+            frozen.check_step(&after, &after);
+        }
+        assert_eq!(frozen.count, 0);
+        let mut meter = EnergyMeter::default();
+        let (e0, e1) = step_energies(&before, &after, Vector::ZERO);
+        meter.observe_step(e0, e1);
+        assert_eq!(meter, EnergyMeter::default());
+        let gap = rest_gap(
+            &[(ball, after.bodies[&ball])],
+            &[(ball, before.bodies[&ball])],
+        );
+        assert_eq!(gap.distance, 0.0);
     }
 }
