@@ -122,6 +122,7 @@ fn main() -> ExitCode {
     let mut reports: Vec<SceneReport> = Vec::new();
     let mut unavailable: Vec<Backend> = Vec::new();
     for scene in &scenes {
+        let first = reports.len();
         for &backend in &args.backends {
             bar.set_message(format!("{} / {}", scene.name, backend));
             match run_scene(scene, backend, &options) {
@@ -150,6 +151,27 @@ fn main() -> ExitCode {
             }
             bar.inc(1);
         }
+        // The rest column compares final poses with rapier's own run of the
+        // same scene: the one above, or one more run (not printed).
+        if scene.effects.settles {
+            let listed = reports[first..]
+                .iter()
+                .find(|r| r.backend == Backend::Rapier)
+                .cloned();
+            let reference = listed.or_else(|| {
+                bar.set_message(format!("{} / rapier (reference)", scene.name));
+                let plain = RunOptions {
+                    trace: false,
+                    ..options
+                };
+                run_scene(scene, Backend::Rapier, &plain).ok()
+            });
+            if let Some(reference) = reference {
+                for report in &mut reports[first..] {
+                    report.compare_rest(&reference);
+                }
+            }
+        }
     }
     bar.finish_and_clear();
 
@@ -163,6 +185,13 @@ fn main() -> ExitCode {
         scenes.len(),
         reports.len(),
         started.elapsed().as_secs_f64()
+    );
+    println!(
+        "frozen: body-steps held (< 1 mm, < 0.01 rad) while faster than 1 m/s or 1 rad/s, \
+in runs of 10+; defl: body-steps whose free path touched nothing but whose velocity \
+changed; rest mm: largest final distance from rapier's run (settling scenes only, \
+ref = rapier itself, - = does not settle); energy %: largest one-step rise of the \
+mechanical energy in % of the run's largest kinetic energy (- = kinematic scripts)"
     );
     println!(
         "reproduce: cargo run --release --example demo -- {}",
@@ -210,6 +239,27 @@ fn ccd_cell(report: &SceneReport) -> String {
     }
 }
 
+/// The rest column: the largest final distance from rapier's run (mm),
+/// `ref` for rapier itself, `-` when the scene does not settle, `?` when no
+/// reference run was available.
+fn rest_cell(report: &SceneReport) -> String {
+    match (report.settles, report.backend, report.rest) {
+        (false, _, _) => "-".to_string(),
+        (true, Backend::Rapier, _) => "ref".to_string(),
+        (true, _, Some(gap)) => format!("{:.1}", gap.distance * 1e3),
+        (true, _, None) => "?".to_string(),
+    }
+}
+
+/// The energy column: the largest one-step rise in percent of the scale,
+/// `-` for scenes with kinematic scripts.
+fn energy_cell(report: &SceneReport) -> String {
+    match report.energy_rise_percent() {
+        Some(percent) => format!("{percent:.2}"),
+        None => "-".to_string(),
+    }
+}
+
 fn print_table(reports: &[SceneReport]) {
     let width = reports
         .iter()
@@ -218,18 +268,33 @@ fn print_table(reports: &[SceneReport]) {
         .unwrap_or(5)
         .max(5);
     println!(
-        "{:<width$}  {:<7} {:>10} {:>7} {:>5} {:>6} {:>8} {:>8}",
-        "scene", "backend", "tunnelling", "missed", "deep", "steps", "step ms", "CCD ms"
+        "{:<width$}  {:<7} {:>10} {:>7} {:>5} {:>6} {:>5} {:>7} {:>8} {:>6} {:>8} {:>8}",
+        "scene",
+        "backend",
+        "tunnelling",
+        "missed",
+        "deep",
+        "frozen",
+        "defl",
+        "rest mm",
+        "energy %",
+        "steps",
+        "step ms",
+        "CCD ms"
     );
-    println!("{}", "-".repeat(width + 60));
+    println!("{}", "-".repeat(width + 89));
     for r in reports {
         println!(
-            "{:<width$}  {:<7} {:>10} {:>7} {:>5} {:>6} {:>8.3} {:>8}",
+            "{:<width$}  {:<7} {:>10} {:>7} {:>5} {:>6} {:>5} {:>7} {:>8} {:>6} {:>8.3} {:>8}",
             r.scene,
             r.backend.name(),
             r.tunnelling,
             r.missed_contacts,
             r.deep_ends,
+            r.frozen,
+            r.deflected,
+            rest_cell(r),
+            energy_cell(r),
             r.steps,
             r.median_step_ms,
             ccd_cell(r)
@@ -247,6 +312,14 @@ fn to_json(reports: &[SceneReport]) -> String {
                 "tunnelling_events": r.tunnelling,
                 "missed_contacts": r.missed_contacts,
                 "deep_ends": r.deep_ends,
+                "frozen": r.frozen,
+                "deflected": r.deflected,
+                "settles": r.settles,
+                "rest_mm": r.rest.map(|g| f64::from(g.distance) * 1e3),
+                "rest_rad": r.rest.map(|g| f64::from(g.angle)),
+                "energy_rise_j": r.energy.map(|e| e.max_rise),
+                "energy_scale_j": r.energy.map(|e| e.scale),
+                "energy_rise_percent": r.energy_rise_percent(),
                 "steps": r.steps,
                 "median_step_ms": r.median_step_ms,
                 "ccd_ms": r.ccd_ms,

@@ -163,3 +163,149 @@ fn with_substeps_the_stage_stays_clean_on_every_scene() {
     }
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
+
+/// The fidelity counters under rapier and affine, one row per run.
+fn print_fidelity(reports: &[SceneReport]) {
+    println!(
+        "{:<26} {:<7} {:>6} {:>5} {:>8} {:>12} {:>8}",
+        "scene", "backend", "frozen", "defl", "rest mm", "energy rise", "energy %"
+    );
+    for r in reports {
+        let rest = match (r.settles, r.rest) {
+            (false, _) => "-".to_string(),
+            (true, Some(gap)) => format!("{:.2}", gap.distance * 1e3),
+            (true, None) => "?".to_string(),
+        };
+        let (rise, percent) = match r.energy {
+            Some(e) => (
+                format!("{:.4} J", e.max_rise),
+                format!("{:.2}", e.rise_percent()),
+            ),
+            None => ("-".to_string(), "-".to_string()),
+        };
+        println!(
+            "{:<26} {:<7} {:>6} {:>5} {:>8} {:>12} {:>8}",
+            r.scene,
+            r.backend.name(),
+            r.frozen,
+            r.deflected,
+            rest,
+            rise,
+            percent
+        );
+    }
+}
+
+/// The stage may remove tunnelling and nothing else: on every scene of the
+/// catalogue it holds no body still against its velocity (`frozen`) and
+/// changes no velocity whose free path touched nothing (`deflected`).
+///
+/// Ignored: today's stage fails it on some scenes (being fixed). Run:
+/// `cargo test --release --test scenes -- --ignored --nocapture affine_is_faithful`.
+#[test]
+#[ignore = "the stage holds and deflects bodies on some scenes today"]
+fn affine_is_faithful_on_every_scene() {
+    let mut reports: Vec<SceneReport> = Vec::new();
+    let mut failures = Vec::new();
+    for scene in scenes::all() {
+        let options = RunOptions {
+            steps: Some(scene.steps.min(MAX_STEPS)),
+            ..RunOptions::default()
+        };
+        let theirs = run_scene(&scene, Backend::Rapier, &options).expect("rapier runs");
+        let mut ours = run_scene(&scene, Backend::Affine, &options).expect("affine runs");
+        ours.compare_rest(&theirs);
+        if !ours.is_faithful() {
+            failures.push(format!(
+                "{}: affine frozen {}, deflected {} (rapier: frozen {}, deflected {})",
+                scene.name, ours.frozen, ours.deflected, theirs.frozen, theirs.deflected
+            ));
+        }
+        reports.push(theirs);
+        reports.push(ours);
+    }
+    print_fidelity(&reports);
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+/// A settling scene of this test's own: three boxes dropped 0.3 m onto a
+/// floor, each on its own, no CCD needed. It comes to rest well within
+/// its 150 steps.
+fn three_boxes_settle(world: &mut rapier3d::prelude::PhysicsWorld) -> scenes::Setup {
+    use rapier3d::math::Vector;
+    use rapier3d::prelude::{ColliderBuilder, RigidBodyBuilder};
+    world.insert_collider(
+        ColliderBuilder::cuboid(5.0, 0.1, 5.0).translation(Vector::new(0.0, -0.1, 0.0)),
+        None,
+    );
+    for i in 0..3 {
+        let x = -1.5 + 1.5 * i as f32;
+        world.insert(
+            RigidBodyBuilder::dynamic().translation(Vector::new(x, 0.5 + 0.1 * i as f32, 0.0)),
+            ColliderBuilder::cuboid(0.2, 0.2, 0.2).friction(0.8),
+        );
+    }
+    scenes::Setup::default()
+}
+
+const SETTLE: scenes::Scene = scenes::Scene {
+    name: "test_three_boxes_settle",
+    about: "three boxes dropped onto a floor, each on its own",
+    dt: 1.0 / 60.0,
+    steps: 150,
+    effects: scenes::Effects {
+        gravity: true,
+        rotation: false,
+        restitution: false,
+        friction: true,
+        kinematic: false,
+        settles: true,
+    },
+    built_to_tunnel: false,
+    view: [0, 1],
+    build: three_boxes_settle,
+};
+
+/// The rest comparison on a settling scene: rapier against itself is 0,
+/// `off` (the same as rapier where no body is fast) is 0 too, and the
+/// counters all report on every backend.
+#[test]
+fn the_rest_counter_compares_final_poses_with_rapier() {
+    let options = RunOptions::default();
+    let reference = run_scene(&SETTLE, Backend::Rapier, &options).expect("rapier runs");
+    let mut reports = Vec::new();
+    for backend in Backend::ALL {
+        let mut report = run_scene(&SETTLE, backend, &options).expect("backend runs");
+        assert!(report.settles && report.rest.is_none());
+        report.compare_rest(&reference);
+        reports.push(report);
+    }
+    print_fidelity(&reports);
+    for r in &reports {
+        let gap = r.rest.expect("a settling scene gets a rest gap");
+        assert!(
+            gap.distance.is_finite() && gap.angle.is_finite(),
+            "{}: {gap:?}",
+            r.backend
+        );
+        assert_eq!(
+            r.final_bodies.len(),
+            3,
+            "{}: three boxes (the floor has no body)",
+            r.backend
+        );
+        assert!(
+            r.energy.is_some(),
+            "{}: closed scene, energy measured",
+            r.backend
+        );
+        if r.backend != Backend::Affine {
+            assert_eq!(gap.distance, 0.0, "{}: the same run as rapier's", r.backend);
+            assert_eq!(gap.angle, 0.0, "{}", r.backend);
+        }
+    }
+    // The boxes really came to rest: not still falling at the end.
+    for (_, state) in &reference.final_bodies {
+        assert!(state.linvel.length() < 0.05, "{state:?}");
+    }
+}

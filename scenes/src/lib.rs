@@ -28,6 +28,7 @@ pub mod bullets;
 pub mod catalog;
 pub mod contraptions;
 pub mod counter;
+pub mod fidelity;
 pub mod floors;
 pub mod guard;
 pub mod kit;

@@ -1,11 +1,14 @@
-//! Runs one scene under one backend and reports what the two oracles saw.
+//! Runs one scene under one backend and reports what the two oracles saw,
+//! and what the fidelity counters ([`super::fidelity`]) saw.
 
 use super::Scene;
 pub use super::backend::{Backend, BackendConfig, Stepper, make_stepper};
 use super::counter::{self, ContactKind};
+use super::fidelity::{self, EnergyMeter, FrozenCounter, RestGap};
 use super::guard::GuardWatch;
-use super::snapshot::Snapshot;
+use super::snapshot::{BodyState, Snapshot};
 use super::svg::Trace;
+use rapier3d::prelude::RigidBodyHandle;
 use std::fmt;
 use std::time::{Duration, Instant};
 
@@ -56,12 +59,53 @@ pub struct SceneReport {
     pub ccd_ms: Option<f64>,
     /// The drawing material, when asked for.
     pub trace: Option<Trace>,
+    /// Body-steps a dynamic body was held while its velocity said it moves,
+    /// in runs of at least [`fidelity::HELD_RUN`] steps ([`FrozenCounter`]).
+    pub frozen: usize,
+    /// Body-steps whose free path touched nothing but whose velocity the
+    /// step changed ([`fidelity::deflected`]).
+    pub deflected: usize,
+    /// The largest one-step rise of the mechanical energy and its scale;
+    /// `None` in scenes with kinematic scripts (energy is not closed there).
+    pub energy: Option<EnergyMeter>,
+    /// Whether the scene settles (`Effects::settles`): its rest poses can be
+    /// compared with rapier's ([`SceneReport::compare_rest`]).
+    pub settles: bool,
+    /// The final state of every body, in handle order.
+    pub final_bodies: Vec<(RigidBodyHandle, BodyState)>,
+    /// Distance of the final poses from a reference run's, once
+    /// [`SceneReport::compare_rest`] was called on a settling scene.
+    pub rest: Option<RestGap>,
 }
 
 impl SceneReport {
-    /// Whether either oracle saw anything.
+    /// Whether either oracle saw anything (tunnelling, missed contacts, deep
+    /// ends; the fidelity counters are left to [`SceneReport::is_faithful`]).
     pub fn is_clean(&self) -> bool {
         self.tunnelling == 0 && self.missed_contacts == 0 && self.deep_ends == 0
+    }
+
+    /// Whether the backend held or deflected no body.
+    pub fn is_faithful(&self) -> bool {
+        self.frozen == 0 && self.deflected == 0
+    }
+
+    /// The largest one-step energy rise in percent of the run's largest
+    /// kinetic energy; `None` in scenes with kinematic scripts.
+    pub fn energy_rise_percent(&self) -> Option<f64> {
+        self.energy.map(|e| e.rise_percent())
+    }
+
+    /// Sets [`SceneReport::rest`] from a reference run of the same scene
+    /// (rapier's, same steps) when the scene settles. A different scene or
+    /// step count leaves it unset.
+    pub fn compare_rest(&mut self, reference: &SceneReport) {
+        if self.settles && reference.scene == self.scene && reference.steps == self.steps {
+            self.rest = Some(fidelity::rest_gap(
+                &self.final_bodies,
+                &reference.final_bodies,
+            ));
+        }
     }
 }
 
@@ -69,7 +113,9 @@ impl SceneReport {
 ///
 /// Each step: scripted kinematic bodies get their targets, a snapshot is
 /// taken, the backend steps (timed), then the guards and the contact
-/// counter judge the step.
+/// counter judge the step, and the fidelity counters compare the snapshots
+/// before and after it. [`SceneReport::rest`] is left unset: it needs a
+/// reference run ([`SceneReport::compare_rest`]).
 pub fn run_scene(
     scene: &Scene,
     backend: Backend,
@@ -84,6 +130,10 @@ pub fn run_scene(
     let mut trace = options.trace.then(|| Trace::start(&world, scene.view));
     let mut times = Vec::with_capacity(steps);
     let (mut tunnelling, mut missed_contacts, mut deep_ends) = (0, 0, 0);
+    let mut frozen = FrozenCounter::default();
+    let mut deflected = 0;
+    let closed = !scene.effects.kinematic;
+    let mut energy = EnergyMeter::default();
     for step in 0..steps {
         let end_time = (step + 1) as f32 * scene.dt;
         for script in &setup.scripts {
@@ -102,12 +152,22 @@ pub fn run_scene(
                 ContactKind::DeepEnd => deep_ends += 1,
             }
         }
+        let after = Snapshot::take(&world);
+        frozen.check_step(&before, &after);
+        deflected += fidelity::deflected(&world, &before, &after).len();
+        if closed {
+            let (e0, e1) = fidelity::step_energies(&before, &after, world.gravity);
+            energy.observe_step(e0, e1);
+        }
         if let Some(trace) = &mut trace {
             trace.record(&world);
             trace.tunnels.extend(tunnels.iter().map(|e| e.at));
             trace.contacts.extend(contacts.iter().map(|e| e.at));
         }
     }
+    let mut final_bodies: Vec<(RigidBodyHandle, BodyState)> =
+        Snapshot::take(&world).bodies.into_iter().collect();
+    final_bodies.sort_by_key(|(h, _)| h.into_raw_parts());
     Ok(SceneReport {
         scene: scene.name,
         backend,
@@ -118,6 +178,12 @@ pub fn run_scene(
         median_step_ms: median_ms(&mut times),
         ccd_ms: stepper.ccd_time().map(|d| d.as_secs_f64() * 1e3),
         trace,
+        frozen: frozen.count,
+        deflected,
+        energy: closed.then_some(energy),
+        settles: scene.effects.settles,
+        final_bodies,
+        rest: None,
     })
 }
 
