@@ -1,6 +1,6 @@
 //! The list of all scenes, and lookup by name.
 
-use super::{Scene, bullets, contraptions, floors, reported, spinners};
+use super::{Scene, bullets, contraptions, floors, reported, settle, spinners};
 
 /// Every scene, family by family.
 pub fn all() -> Vec<Scene> {
@@ -9,6 +9,7 @@ pub fn all() -> Vec<Scene> {
     scenes.extend(spinners::scenes());
     scenes.extend(contraptions::scenes());
     scenes.extend(reported::scenes());
+    scenes.extend(settle::scenes());
     scenes
 }
 

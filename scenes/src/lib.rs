@@ -34,6 +34,7 @@ pub mod kit;
 pub mod reported;
 pub mod runner;
 pub mod script;
+pub mod settle;
 pub mod snapshot;
 pub mod spinners;
 pub mod step_path;
