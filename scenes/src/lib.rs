@@ -31,6 +31,7 @@ pub mod counter;
 pub mod floors;
 pub mod guard;
 pub mod kit;
+pub mod near_miss;
 pub mod reported;
 pub mod runner;
 pub mod script;
