@@ -18,13 +18,16 @@ pub fn scenes() -> Vec<Scene> {
         settles: true,
         ..Effects::default()
     };
-    let scene = |name, about, build| Scene {
+    // Without CCD the slab falls through the two-triangle floor (it lands
+    // flat at 10 m/s, 16 cm a step, five times its thickness); on the waves
+    // it lands on the bumps first and only sinks.
+    let scene = |name, about, built_to_tunnel, build| Scene {
         name,
         about,
         dt: 1.0 / 60.0,
         steps: 600,
         effects: settling,
-        built_to_tunnel: false,
+        built_to_tunnel,
         view: [0, 1],
         build,
     };
@@ -32,16 +35,19 @@ pub fn scenes() -> Vec<Scene> {
         scene(
             "settle_flat",
             "a box, a slab, a capsule and a ball dropped tilted from 1-5 m onto a 2-triangle trimesh; they come to rest",
+            true,
             settle_flat as fn(&mut PhysicsWorld) -> Setup,
         ),
         scene(
             "settle_wavy",
             "the same four bodies dropped into the troughs of a wavy trimesh (5 cm bumps, 2.4 m apart); they come to rest",
+            false,
             settle_wavy,
         ),
         scene(
             "settle_heightfield",
             "the same four bodies dropped into the troughs of the same waves as a heightfield; they come to rest",
+            false,
             settle_heightfield,
         ),
     ]
@@ -71,16 +77,16 @@ fn waves(x: Real, z: Real) -> Real {
 fn drop_four(world: &mut PhysicsWorld, floor: ColliderHandle) -> Setup {
     const D: Real = WAVELENGTH;
     let drops: [(Vector, Vector, ColliderBuilder); 4] = [
-        // Box (0.3 half extents), 0.1 rad about x, bottom 2 m up.
+        // Box (0.3 half extents), 0.3 rad about z, 2 m up.
         (
             Vector::new(-D, 2.3, -D),
-            Vector::new(0.1, 0.0, 0.0),
+            Vector::new(0.0, 0.0, 0.3),
             ColliderBuilder::cuboid(0.3, 0.3, 0.3),
         ),
-        // Slab (2 m x 6 cm x 2 m), 0.1 rad about x, 5 m up.
+        // Slab (2 m x 6 cm x 2 m), 0.3 rad about z, 5 m up.
         (
             Vector::new(D, 5.0, -D),
-            Vector::new(0.1, 0.0, 0.0),
+            Vector::new(0.0, 0.0, 0.3),
             ColliderBuilder::cuboid(1.0, 0.03, 1.0),
         ),
         // Capsule (half height 0.3, r 0.1), standing, 0.6 rad about x and
