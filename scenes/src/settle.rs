@@ -18,9 +18,9 @@ pub fn scenes() -> Vec<Scene> {
         settles: true,
         ..Effects::default()
     };
-    // Without CCD the slab falls through the two-triangle floor (it lands
-    // flat at 10 m/s, 16 cm a step, five times its thickness); on the waves
-    // it lands on the bumps first and only sinks.
+    // Without CCD the slab falls through the two-triangle floor (10 m/s at
+    // impact, 16 cm a step, five times its thickness); on the waves it only
+    // sinks, by a few centimetres, like the other bodies.
     let scene = |name, about, built_to_tunnel, build| Scene {
         name,
         about,
