@@ -1,6 +1,6 @@
 //! The list of all scenes, and lookup by name.
 
-use super::{Scene, bullets, contraptions, floors, spinners};
+use super::{Scene, bullets, contraptions, floors, near_miss, reported, settle, spinners};
 
 /// Every scene, family by family.
 pub fn all() -> Vec<Scene> {
@@ -8,6 +8,9 @@ pub fn all() -> Vec<Scene> {
     scenes.extend(floors::scenes());
     scenes.extend(spinners::scenes());
     scenes.extend(contraptions::scenes());
+    scenes.extend(reported::scenes());
+    scenes.extend(settle::scenes());
+    scenes.extend(near_miss::scenes());
     scenes
 }
 

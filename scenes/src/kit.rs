@@ -160,3 +160,30 @@ impl Lcg {
         lo + (hi - lo) * self.unit()
     }
 }
+
+/// `Crossing` guards both ways for two bodies meeting each other: neither
+/// centre of mass may enter or pass the other body's first collider.
+pub fn mutual_guards(world: &PhysicsWorld, a: RigidBodyHandle, b: RigidBodyHandle) -> Vec<Guard> {
+    let mut guards = Vec::new();
+    for (body, other) in [(a, b), (b, a)] {
+        if let Some(&obstacle) = world
+            .bodies
+            .get(other)
+            .and_then(|rb| rb.colliders().first())
+        {
+            guards.push(Guard::Crossing { body, obstacle });
+        }
+    }
+    guards
+}
+
+/// Whether every dynamic body is at rest: linear speed below `speed` (m/s)
+/// and angular speed below `spin` (rad/s). Used by the tests of the scenes
+/// that claim `Effects::settles`.
+pub fn all_at_rest(world: &PhysicsWorld, speed: Real, spin: Real) -> bool {
+    world
+        .bodies
+        .iter()
+        .filter(|(_, rb)| rb.is_dynamic())
+        .all(|(_, rb)| rb.linvel().length() < speed && rb.angvel().length() < spin)
+}
