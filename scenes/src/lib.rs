@@ -91,8 +91,9 @@ pub struct Scene {
     pub steps: usize,
     /// Effects the scene exercises; `effects.gravity` says whether gravity is on.
     pub effects: Effects,
-    /// Whether the scene is built so that a world without CCD tunnels
-    /// (the oracle must see it); `false` for control scenes.
+    /// Whether the scene is built so that a world without CCD tunnels or
+    /// ends deep in something (the oracle must see it); `false` for control
+    /// scenes, on which no backend may show anything.
     pub built_to_tunnel: bool,
     /// The two world axes of the side view drawn by [`svg`] (0 = x, 1 = y, 2 = z):
     /// horizontal, then vertical.

@@ -53,10 +53,13 @@ pub struct CcdConfig {
     /// `min(skin, ½·prediction distance)`; rapier's prediction distance is
     /// 2 cm by default.
     pub skin: f64,
-    /// Metres a fast body touching something at the start of a step may
-    /// sink into it during the step (beyond its start depth) before the
-    /// stage stops it. Rapier's contacts own such pairs; this only keeps the
-    /// solver from pushing a fast body deep (a spinning edge into a wall).
+    /// Metres a contact may go deep within a step before the stage steps
+    /// in. A fast body touching something at the start may sink this far
+    /// beyond its start depth (rapier's contacts own such pairs; this only
+    /// keeps the solver from pushing a fast body deep, such as a spinning
+    /// edge into a wall), and a contact made so late in the step that the
+    /// pair cannot move this far after it is left to rapier's contacts as
+    /// well (a slow landing is not clamped).
     pub sink: f64,
     #[serde(with = "ArithmeticDef")]
     pub arithmetic: Arithmetic,

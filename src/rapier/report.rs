@@ -45,8 +45,11 @@ pub struct CcdReport {
     /// Collider pairs handed to the time-of-impact query.
     pub pairs: usize,
     /// Pairs already within the skin at the start of the step, left to
-    /// rapier's contacts (penetrating) or re-asked with a smaller skin.
+    /// rapier's contacts unless they sink deeper than `CcdConfig::sink`.
     pub pairs_touching_at_start: usize,
+    /// Contacts made during the step too late to get deeper than
+    /// `CcdConfig::sink`, left to rapier's contacts (no clamp).
+    pub shallow_contacts: usize,
     /// Pair evaluations the query spent.
     pub evaluations: u64,
     /// One event per clamped body.
@@ -76,6 +79,7 @@ impl CcdReport {
         self.bodies_swept += piece.bodies_swept;
         self.pairs += piece.pairs;
         self.pairs_touching_at_start += piece.pairs_touching_at_start;
+        self.shallow_contacts += piece.shallow_contacts;
         self.evaluations += piece.evaluations;
         self.sensor_crossings += piece.sensor_crossings;
         // A piece's own report has one piece: its length.

@@ -84,7 +84,10 @@ struct Earliest {
 ///
 /// The others are searched together at **zero skin**: an impact is the
 /// true contact, backed off along the motion (see `backoff`). A near miss
-/// (a ball passing an edge within the skin) is no impact.
+/// (a ball passing an edge within the skin) is no impact, and neither is a
+/// contact that cannot get deeper than `sink` before the step ends (the
+/// pair's travel after it is smaller): rapier's contacts resolve it next
+/// step exactly as they would without CCD.
 fn earliest(
     moving: &ShapeMotion,
     targets: &[ShapeMotion],
@@ -139,6 +142,15 @@ fn earliest(
         let t = &targets[j];
         if many.toi.status != RootStatus::InitiallyTouching {
             let travel = pair_travel(moving.shape, &moving.motion, t.shape, &t.motion);
+            // No point of the pair moves farther than this after the
+            // contact, so it gets no deeper: rapier's contacts take it
+            // next step as they would without CCD (a slow landing).
+            let after = travel * (opts.time_range.hi - many.toi.fraction).max(0.0);
+            if after <= sink && many.toi.status == RootStatus::Hit {
+                report.shallow_contacts += 1;
+                alive.remove(many.target);
+                continue;
+            }
             keep(Earliest {
                 toi: back_off(many.toi, travel, BACKOFF * opts.skin, lo),
                 target: j,
