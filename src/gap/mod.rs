@@ -95,7 +95,7 @@ impl PairGap {
             PairGap::CuboidCuboid(_) => CuboidCuboid::AXES,
             PairGap::CuboidTriangle(_) => CuboidTriangle::AXES,
             PairGap::HalfSpace(_) => HalfSpaceConvex::AXES,
-            PairGap::SupportMap(_) => SupportMap::AXES,
+            PairGap::SupportMap(g) => g.axis_count(),
         }
     }
 

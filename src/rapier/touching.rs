@@ -57,13 +57,14 @@ pub(super) fn touching_pair(
 ) -> Result<Option<Toi>, CcdError> {
     let (s1, m1, s2, m2) = (moving.shape, &moving.motion, target.shape, &target.motion);
     let allowed = (-gap0).max(sink);
+    let lo = opts.time_range.lo;
+    let hi = opts.time_range.hi;
     let travel = pair_travel(s1, m1, s2, m2);
     let samples = ((travel / sink).ceil() as usize).clamp(4, MAX_TOUCH_SAMPLES);
     // parry's contact only needs to look as far as a sample can move: a
     // larger prediction makes it visit every mesh part within it.
     let reach = opts.skin.max(allowed) + travel / samples as f64 + 1.0e-3;
-    let lo = opts.time_range.lo;
-    let width = opts.time_range.hi - lo;
+    let width = hi - lo;
     let mut prev = lo;
     for k in 1..=samples {
         let tau = lo + width * k as f64 / samples as f64;
