@@ -189,8 +189,8 @@ fn main() -> ExitCode {
     println!(
         "frozen: body-steps held (< 1 mm, < 0.01 rad) while faster than 1 m/s or 1 rad/s, \
 in runs of 10+; defl: body-steps whose free path touched nothing but whose velocity \
-changed; rest mm: largest final distance from rapier's run (settling scenes only, \
-ref = rapier itself, - = does not settle); energy %: largest one-step rise of the \
+changed; rest mm: largest final height difference / distance from rapier's run, bodies \
+rapier lost left out (settling scenes only, ref = rapier itself, - = does not settle); energy %: largest one-step rise of the \
 mechanical energy in % of the run's largest kinetic energy (- = kinematic scripts)"
     );
     println!(
@@ -239,14 +239,15 @@ fn ccd_cell(report: &SceneReport) -> String {
     }
 }
 
-/// The rest column: the largest final distance from rapier's run (mm),
-/// `ref` for rapier itself, `-` when the scene does not settle, `?` when no
-/// reference run was available.
+/// The rest column: the largest final height difference from rapier's run
+/// and the largest final distance (mm, `height/distance`), `ref` for rapier
+/// itself, `-` when the scene does not settle, `?` when no reference run was
+/// available.
 fn rest_cell(report: &SceneReport) -> String {
     match (report.settles, report.backend, report.rest) {
         (false, _, _) => "-".to_string(),
         (true, Backend::Rapier, _) => "ref".to_string(),
-        (true, _, Some(gap)) => format!("{:.1}", gap.distance * 1e3),
+        (true, _, Some(gap)) => format!("{:.1}/{:.0}", gap.height * 1e3, gap.distance * 1e3),
         (true, _, None) => "?".to_string(),
     }
 }
@@ -268,7 +269,7 @@ fn print_table(reports: &[SceneReport]) {
         .unwrap_or(5)
         .max(5);
     println!(
-        "{:<width$}  {:<7} {:>10} {:>7} {:>5} {:>6} {:>5} {:>7} {:>8} {:>6} {:>8} {:>8}",
+        "{:<width$}  {:<7} {:>10} {:>7} {:>5} {:>6} {:>5} {:>10} {:>8} {:>6} {:>8} {:>8}",
         "scene",
         "backend",
         "tunnelling",
@@ -282,10 +283,10 @@ fn print_table(reports: &[SceneReport]) {
         "step ms",
         "CCD ms"
     );
-    println!("{}", "-".repeat(width + 89));
+    println!("{}", "-".repeat(width + 92));
     for r in reports {
         println!(
-            "{:<width$}  {:<7} {:>10} {:>7} {:>5} {:>6} {:>5} {:>7} {:>8} {:>6} {:>8.3} {:>8}",
+            "{:<width$}  {:<7} {:>10} {:>7} {:>5} {:>6} {:>5} {:>10} {:>8} {:>6} {:>8.3} {:>8}",
             r.scene,
             r.backend.name(),
             r.tunnelling,
@@ -317,6 +318,8 @@ fn to_json(reports: &[SceneReport]) -> String {
                 "settles": r.settles,
                 "rest_mm": r.rest.map(|g| f64::from(g.distance) * 1e3),
                 "rest_rad": r.rest.map(|g| f64::from(g.angle)),
+                "rest_height_mm": r.rest.map(|g| f64::from(g.height) * 1e3),
+                "rest_tilt_rad": r.rest.map(|g| f64::from(g.tilt)),
                 "energy_rise_j": r.energy.map(|e| e.max_rise),
                 "energy_scale_j": r.energy.map(|e| e.scale),
                 "energy_rise_percent": r.energy_rise_percent(),

@@ -107,32 +107,57 @@ pub struct RestGap {
     /// Largest rotation angle between a body's final orientation and the
     /// reference's (radians); infinite as above.
     pub angle: Real,
+    /// Largest difference of a body's final height (its centre of mass
+    /// along `up`, metres): whether it rests *on* what the reference's
+    /// rests on, whatever it slid or rolled sideways.
+    pub height: Real,
+    /// Largest angle between the body axes that point `up` in the two runs
+    /// (radians): whether it rests on the same face, as flat, whatever it
+    /// turned about the vertical.
+    pub tilt: Real,
 }
 
 /// Compares the final dynamic bodies of a run with those of a reference run
-/// of the same scene (handles match: the build order is deterministic).
+/// of the same scene (handles match: the build order is deterministic),
+/// leaving out the bodies in `skip` (those the reference lost through
+/// something: its pose there is no reference). `up` is the unit vertical.
 pub fn rest_gap(
     bodies: &[(RigidBodyHandle, BodyState)],
     reference: &[(RigidBodyHandle, BodyState)],
+    skip: &[RigidBodyHandle],
+    up: Vector,
 ) -> RestGap {
     let reference: HashMap<RigidBodyHandle, &BodyState> =
         reference.iter().map(|(h, s)| (*h, s)).collect();
     let mut gap = RestGap::default();
     for (handle, state) in bodies {
-        if state.body_type != RigidBodyType::Dynamic {
+        if state.body_type != RigidBodyType::Dynamic || skip.contains(handle) {
             continue;
         }
-        let (distance, angle) = match reference.get(handle) {
-            Some(r) => (
-                (state.com() - r.com()).length(),
-                state.pose.rotation.angle_between(r.pose.rotation),
+        let (distance, angle, height, tilt) = match reference.get(handle) {
+            Some(r) => {
+                let body_up = state.pose.rotation.inverse() * up;
+                let their_up = r.pose.rotation.inverse() * up;
+                (
+                    (state.com() - r.com()).length(),
+                    state.pose.rotation.angle_between(r.pose.rotation),
+                    (state.com() - r.com()).dot(up).abs(),
+                    body_up.angle_between(their_up),
+                )
+            }
+            None => (
+                Real::INFINITY,
+                Real::INFINITY,
+                Real::INFINITY,
+                Real::INFINITY,
             ),
-            None => (Real::INFINITY, Real::INFINITY),
         };
         // NaN compares false: make it visible as infinity.
         let finite_or_inf = |x: Real| if x.is_finite() { x } else { Real::INFINITY };
         gap.distance = gap.distance.max(finite_or_inf(distance));
         gap.angle = gap.angle.max(finite_or_inf(angle));
+        gap.height = gap.height.max(finite_or_inf(height));
+        gap.tilt = gap.tilt.max(finite_or_inf(tilt));
     }
     gap
 }
@@ -587,10 +612,29 @@ mod tests {
         let body = RigidBodyHandle::from_raw_parts(3, 0);
         let ours = [(body, state(Vector::new(0.01, 0.5, 0.0), Vector::ZERO))];
         let reference = [(body, state(Vector::new(0.0, 0.5, 0.0), Vector::ZERO))];
-        let gap = rest_gap(&ours, &reference);
+        let gap = rest_gap(&ours, &reference, &[], Vector::Y);
         assert!((gap.distance * 1e3 - 10.0).abs() < 1e-3, "{gap:?}");
-        assert_eq!(gap.angle, 0.0);
-        assert_eq!(rest_gap(&reference, &reference), RestGap::default());
+        assert_eq!((gap.angle, gap.height, gap.tilt), (0.0, 0.0, 0.0));
+        assert_eq!(
+            rest_gap(&reference, &reference, &[], Vector::Y),
+            RestGap::default()
+        );
+        // 1 cm higher and tipped 0.1 rad: the height and the tilt see it.
+        let tipped = state(Vector::new(0.0, 0.51, 0.0), Vector::ZERO);
+        let tipped = BodyState {
+            pose: Pose::from_parts(tipped.pose.translation, Rotation::from_rotation_z(0.1)),
+            ..tipped
+        };
+        let gap = rest_gap(&[(body, tipped)], &reference, &[], Vector::Y);
+        assert!(
+            (gap.height - 0.01).abs() < 1e-5 && (gap.tilt - 0.1).abs() < 1e-4,
+            "{gap:?}"
+        );
+        // A body the reference lost is not compared.
+        assert_eq!(
+            rest_gap(&[(body, tipped)], &reference, &[body], Vector::Y),
+            RestGap::default()
+        );
     }
 
     #[test]
@@ -697,6 +741,8 @@ mod tests {
         let gap = rest_gap(
             &[(ball, after.bodies[&ball])],
             &[(ball, before.bodies[&ball])],
+            &[],
+            Vector::Y,
         );
         assert_eq!(gap.distance, 0.0);
     }

@@ -8,7 +8,7 @@ use super::fidelity::{self, EnergyMeter, FrozenCounter, RestGap};
 use super::guard::GuardWatch;
 use super::snapshot::{BodyState, Snapshot};
 use super::svg::Trace;
-use rapier3d::prelude::RigidBodyHandle;
+use rapier3d::prelude::{RigidBodyHandle, Vector};
 use std::fmt;
 use std::time::{Duration, Instant};
 
@@ -73,6 +73,10 @@ pub struct SceneReport {
     pub settles: bool,
     /// The final state of every body, in handle order.
     pub final_bodies: Vec<(RigidBodyHandle, BodyState)>,
+    /// The bodies some guard saw pass an obstacle (once each).
+    pub tunnelled: Vec<RigidBodyHandle>,
+    /// The unit vertical of the scene (against gravity; y without it).
+    pub up: Vector,
     /// Distance of the final poses from a reference run's, once
     /// [`SceneReport::compare_rest`] was called on a settling scene.
     pub rest: Option<RestGap>,
@@ -104,6 +108,8 @@ impl SceneReport {
             self.rest = Some(fidelity::rest_gap(
                 &self.final_bodies,
                 &reference.final_bodies,
+                &reference.tunnelled,
+                self.up,
             ));
         }
     }
@@ -130,6 +136,7 @@ pub fn run_scene(
     let mut trace = options.trace.then(|| Trace::start(&world, scene.view));
     let mut times = Vec::with_capacity(steps);
     let (mut tunnelling, mut missed_contacts, mut deep_ends) = (0, 0, 0);
+    let mut tunnelled = Vec::new();
     let mut frozen = FrozenCounter::default();
     let mut deflected = 0;
     let closed = !scene.effects.kinematic;
@@ -146,6 +153,12 @@ pub fn run_scene(
         let tunnels = watch.check(&world, &setup.guards, &before, step);
         let contacts = counter::check_step(&world, &before, step);
         tunnelling += tunnels.len();
+        for event in &tunnels {
+            let body = setup.guards[event.guard].body();
+            if !tunnelled.contains(&body) {
+                tunnelled.push(body);
+            }
+        }
         for event in &contacts {
             match event.kind {
                 ContactKind::Missed => missed_contacts += 1,
@@ -183,6 +196,8 @@ pub fn run_scene(
         energy: closed.then_some(energy),
         settles: scene.effects.settles,
         final_bodies,
+        tunnelled,
+        up: (-world.gravity).try_normalize().unwrap_or(Vector::Y),
         rest: None,
     })
 }
