@@ -622,7 +622,10 @@ mod tests {
         // 1 cm higher and tipped 0.1 rad: the height and the tilt see it.
         let tipped = state(Vector::new(0.0, 0.51, 0.0), Vector::ZERO);
         let tipped = BodyState {
-            pose: Pose::from_parts(tipped.pose.translation, Rotation::from_rotation_z(0.1)),
+            pose: Pose::from_parts(
+                tipped.pose.translation,
+                rapier3d::math::Rotation::from_rotation_z(0.1),
+            ),
             ..tipped
         };
         let gap = rest_gap(&[(body, tipped)], &reference, &[], Vector::Y);
