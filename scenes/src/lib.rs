@@ -9,7 +9,7 @@
 //! The builder returns a [`Setup`]: the guards (which body must stay on which
 //! side of which obstacle) and the scripts that drive kinematic bodies.
 //!
-//! Two independent counters judge a run:
+//! Three families of counters judge a run:
 //!
 //! - [`guard`]: a per-scene geometric invariant. A body ended on the wrong
 //!   side of an obstacle it should have hit ("tunnelling events").
@@ -17,6 +17,10 @@
 //!   colliders that may collide is sampled along the motion between its two
 //!   poses; a contact that only exists between the poses is a "missed
 //!   contact", a step that starts shallow and ends deep is a "deep end".
+//! - [`fidelity`]: what a CCD backend must *not* do besides removing
+//!   tunnelling: hold a body still against its velocity ("frozen"), change
+//!   the velocity of a body whose free path touches nothing ("deflected"),
+//!   let mechanical energy rise, or rest bodies elsewhere than rapier does.
 //!
 //! [`runner`] steps a scene under a [`Backend`] and returns a
 //! [`SceneReport`]; [`svg`] draws a run.
