@@ -8,11 +8,13 @@ use super::moved::Moved;
 use super::report::CcdReport;
 use super::touching::{gap_at, touching_pair};
 use super::world::{StageWorld, StepMotions};
+use crate::convert::pose_from_iso;
 use crate::enclosure::TimeSpan;
 use crate::error::CcdError;
-use crate::motion::Motion;
+use crate::motion::{Motion, Trajectory};
 use crate::query::{QueryOptions, ShapeMotion, Toi, Witness, time_of_impact, time_of_impact_many};
 use crate::solve::RootStatus;
+use rapier3d::parry::bounding_volume::BoundingVolume;
 use rapier3d::parry::query::QueryDispatcher;
 use rapier3d::parry::shape::Shape;
 use rapier3d::prelude::RigidBodyHandle;
@@ -112,7 +114,16 @@ fn earliest(
         touching_pair(moving, &targets[j], gap, sink, opts, report)
     };
     let mut alive: Vec<usize> = Vec::with_capacity(targets.len());
+    // parry's contact costs GJK (and EPA when touching): ask it only for
+    // pairs whose boxes at the start come within the skin.
+    let start_box = |s: &dyn Shape, m: &Motion| s.compute_aabb(&pose_from_iso(&m.pose_at(lo)));
+    let moving_box =
+        start_box(moving.shape, &moving.motion).loosened(opts.skin as f32 * 1.01 + 1.0e-6);
     for (j, t) in targets.iter().enumerate() {
+        if !moving_box.intersects(&start_box(t.shape, &t.motion)) {
+            alive.push(j);
+            continue;
+        }
         match gap_at(moving.shape, &moving.motion, t.shape, &t.motion, lo, reach) {
             Some((gap, _)) if gap <= opts.skin => {
                 if let Some(toi) = touching(j, gap, report)? {

@@ -60,6 +60,10 @@ pub(super) fn touching_pair(
     let lo = opts.time_range.lo;
     let hi = opts.time_range.hi;
     let travel = pair_travel(s1, m1, s2, m2);
+    // No point moves far enough to get deeper than allowed: nothing to do.
+    if travel <= allowed + gap0 {
+        return Ok(None);
+    }
     let samples = ((travel / sink).ceil() as usize).clamp(4, MAX_TOUCH_SAMPLES);
     // parry's contact only needs to look as far as a sample can move: a
     // larger prediction makes it visit every mesh part within it.
