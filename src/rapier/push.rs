@@ -12,7 +12,10 @@ use super::report::{CcdReport, SkipReason};
 use super::sweep::{self, Workspace};
 use super::world::{StageWorld, StepMotions};
 use crate::query::QueryOptions;
-use rapier3d::prelude::{BroadPhaseBvh, RigidBodyHandle, Vector};
+use rapier3d::parry::bounding_volume::Aabb;
+use rapier3d::parry::query::QueryDispatcher;
+use rapier3d::prelude::{BroadPhaseBvh, QueryFilter, RigidBodyHandle, Vector};
+use std::collections::{HashMap, HashSet};
 
 /// Most bodies one step's pushers carry.
 const MAX_CARRIED: usize = 64;
@@ -41,29 +44,100 @@ struct Cand {
 pub(super) fn push(
     scene: &StageWorld,
     broad_phase: &BroadPhaseBvh,
-    dispatcher: &dyn rapier3d::parry::query::QueryDispatcher,
+    dispatcher: &dyn QueryDispatcher,
     current: &mut Vec<Moved>,
-    front: &mut std::collections::HashSet<RigidBodyHandle>,
+    front: &mut HashSet<RigidBodyHandle>,
     dt: f64,
     opts: &QueryOptions,
     ws: &mut Workspace,
     report: &mut CcdReport,
 ) -> Vec<(usize, sweep::BodyHit, Vector)> {
-    use std::collections::{HashMap, HashSet};
+    let query = Sweeper {
+        scene,
+        broad_phase,
+        dispatcher,
+        dt,
+        opts,
+    };
     let mut out = Vec::new();
     let mut cands: Vec<Cand> = Vec::new();
     let mut seen: HashSet<RigidBodyHandle> = front.clone();
     let mut fresh: HashSet<RigidBodyHandle> = front.clone();
     let mut velocities: HashMap<RigidBodyHandle, Vector> = HashMap::new();
-    let reach = 2.0 * opts.skin + 1.0e-4;
-    let mut near = |current: &mut Vec<Moved>,
-                    b: rapier3d::parry::bounding_volume::Aabb,
-                    cands: &mut Vec<Cand>| {
-        let query = broad_phase.as_query_pipeline(
-            dispatcher,
+    let boxes: Vec<_> = current
+        .iter()
+        .filter(|m| m.pusher)
+        .filter_map(|m| body_box(scene, m))
+        .collect();
+    for b in boxes {
+        query.gather_near(current, &mut seen, b, &mut cands);
+    }
+    while out.len() < MAX_CARRIED {
+        query.sweep_candidates(current, &mut cands, front, &fresh, ws, report);
+        fresh.clear();
+        // The earliest impact of any candidate is carried first.
+        let Some(k) = (0..cands.len())
+            .filter(|&k| !cands[k].done && cands[k].best.is_some())
+            .min_by(|&a, &b| {
+                let fa = cands[a].best.map_or(1.0, |h| h.toi.fraction);
+                let fb = cands[b].best.map_or(1.0, |h| h.toi.fraction);
+                fa.total_cmp(&fb)
+            })
+        else {
+            break;
+        };
+        cands[k].done = true;
+        let (i, hit) = (cands[k].i, cands[k].best.expect("filtered"));
+        let Some(by) = scene.colliders[hit.collider2].parent() else {
+            continue;
+        };
+        let Some(p) = current.iter().position(|m| m.handle == by) else {
+            continue;
+        };
+        match clamp::carry(scene.bodies, &current[i], &current[p], hit.toi.fraction, dt) {
+            Ok((cut, v)) => {
+                let v = velocities.get(&by).copied().unwrap_or(v);
+                let h = cut.handle;
+                current[i] = cut;
+                velocities.insert(h, v);
+                front.insert(h);
+                fresh.insert(h);
+                out.push((i, hit, v));
+                if let Some(b) = body_box(scene, &current[i]) {
+                    query.gather_near(current, &mut seen, b, &mut cands);
+                }
+            }
+            Err(e) => report.skip(current[i].handle, SkipReason::Query(e.to_string())),
+        }
+    }
+    out
+}
+
+/// What every push sweep of the step reads.
+struct Sweeper<'w, 's> {
+    scene: &'w StageWorld<'s>,
+    broad_phase: &'w BroadPhaseBvh,
+    dispatcher: &'w dyn QueryDispatcher,
+    dt: f64,
+    opts: &'w QueryOptions,
+}
+
+impl Sweeper<'_, '_> {
+    /// Adds as candidates the dynamic bodies not seen yet whose colliders
+    /// meet `b` (a body at rest joins `current` with a motion that stays).
+    fn gather_near(
+        &self,
+        current: &mut Vec<Moved>,
+        seen: &mut HashSet<RigidBodyHandle>,
+        b: Aabb,
+        cands: &mut Vec<Cand>,
+    ) {
+        let scene = self.scene;
+        let query = self.broad_phase.as_query_pipeline(
+            self.dispatcher,
             scene.bodies,
             scene.colliders,
-            rapier3d::prelude::QueryFilter::default(),
+            QueryFilter::default(),
         );
         for (_, co) in query.intersect_aabb_conservative(b) {
             let Some(h) = co.parent() else { continue };
@@ -99,95 +173,64 @@ pub(super) fn push(
                 done: false,
             });
         }
-    };
-    let boxes: Vec<_> = current
-        .iter()
-        .filter(|m| m.pusher)
-        .filter_map(|m| body_box(scene, m))
-        .collect();
-    for b in boxes {
-        near(current, b, &mut cands);
     }
-    while out.len() < MAX_CARRIED {
-        {
-            let motions = StepMotions::new(current, dt);
-            ws.motions.clear();
-            for c in cands.iter_mut().filter(|c| !c.done) {
-                let set = if c.swept { &fresh } else { &*front };
-                c.swept = true;
-                if set.is_empty() {
-                    continue;
-                }
-                let body = &current[c.i];
-                let touching = set.iter().find_map(|h| {
-                    let p = motions.body(*h)?;
-                    sweep::pushed_at_start(scene, body, p, reach, scene.config.sink)
-                });
-                let hit = match touching {
-                    Some(hit) => Some(hit),
-                    None => {
-                        report.bodies_swept += 1;
-                        match sweep::sweep_body(
-                            scene,
-                            broad_phase,
-                            dispatcher,
-                            &motions,
-                            body,
-                            sweep::Targets::Only(set),
-                            opts,
-                            ws,
-                            report,
-                            &mut Vec::new(),
-                        ) {
-                            Ok(hit) => hit.filter(|h| h.toi.fraction < 1.0),
-                            Err(e) => {
-                                report.skip(body.handle, SkipReason::Query(e.to_string()));
-                                None
-                            }
+
+    /// Sweeps each open candidate against the front (a candidate swept
+    /// before only against its new members, `fresh`), keeping its earliest
+    /// impact. A candidate the front drives into from the start is hit at 0.
+    fn sweep_candidates(
+        &self,
+        current: &[Moved],
+        cands: &mut [Cand],
+        front: &HashSet<RigidBodyHandle>,
+        fresh: &HashSet<RigidBodyHandle>,
+        ws: &mut Workspace,
+        report: &mut CcdReport,
+    ) {
+        let scene = self.scene;
+        let reach = 2.0 * self.opts.skin + 1.0e-4;
+        let motions = StepMotions::new(current, self.dt);
+        ws.motions.clear();
+        for c in cands.iter_mut().filter(|c| !c.done) {
+            let set = if c.swept { fresh } else { front };
+            c.swept = true;
+            if set.is_empty() {
+                continue;
+            }
+            let body = &current[c.i];
+            let touching = set.iter().find_map(|h| {
+                let p = motions.body(*h)?;
+                sweep::pushed_at_start(scene, body, p, reach, scene.config.sink)
+            });
+            let hit = match touching {
+                Some(hit) => Some(hit),
+                None => {
+                    report.bodies_swept += 1;
+                    match sweep::sweep_body(
+                        scene,
+                        self.broad_phase,
+                        self.dispatcher,
+                        &motions,
+                        body,
+                        sweep::Targets::Only(set),
+                        self.opts,
+                        ws,
+                        report,
+                        &mut Vec::new(),
+                    ) {
+                        Ok(hit) => hit.filter(|h| h.toi.fraction < 1.0),
+                        Err(e) => {
+                            report.skip(body.handle, SkipReason::Query(e.to_string()));
+                            None
                         }
                     }
-                };
-                if let Some(hit) = hit
-                    && c.best.is_none_or(|b| hit.toi.fraction < b.toi.fraction)
-                {
-                    c.best = Some(hit);
                 }
+            };
+            if let Some(hit) = hit
+                && c.best.is_none_or(|b| hit.toi.fraction < b.toi.fraction)
+            {
+                c.best = Some(hit);
             }
-        }
-        fresh.clear();
-        let Some(k) = (0..cands.len())
-            .filter(|&k| !cands[k].done && cands[k].best.is_some())
-            .min_by(|&a, &b| {
-                let fa = cands[a].best.map_or(1.0, |h| h.toi.fraction);
-                let fb = cands[b].best.map_or(1.0, |h| h.toi.fraction);
-                fa.total_cmp(&fb)
-            })
-        else {
-            break;
-        };
-        cands[k].done = true;
-        let (i, hit) = (cands[k].i, cands[k].best.expect("filtered"));
-        let Some(by) = scene.colliders[hit.collider2].parent() else {
-            continue;
-        };
-        let Some(p) = current.iter().position(|m| m.handle == by) else {
-            continue;
-        };
-        match clamp::carry(scene.bodies, &current[i], &current[p], hit.toi.fraction, dt) {
-            Ok((cut, v)) => {
-                let v = velocities.get(&by).copied().unwrap_or(v);
-                let h = cut.handle;
-                current[i] = cut;
-                velocities.insert(h, v);
-                front.insert(h);
-                fresh.insert(h);
-                out.push((i, hit, v));
-                if let Some(b) = body_box(scene, &current[i]) {
-                    near(current, b, &mut cands);
-                }
-            }
-            Err(e) => report.skip(current[i].handle, SkipReason::Query(e.to_string())),
         }
     }
-    out
 }
