@@ -1,8 +1,7 @@
 //! Fast projectiles: balls, cuboids, cones and cylinders against thin walls
 //! and a half-space, and fast dynamic bodies meeting head-on.
 
-use super::guard::Guard;
-use super::kit::{beyond_guards, crossing_guards, thin_wall};
+use super::kit::{beyond_guards, crossing_guards, mutual_guards, thin_wall};
 use super::{Effects, Scene, Setup};
 use rapier3d::math::Vector;
 use rapier3d::parry::shape::SharedShape;
@@ -260,15 +259,7 @@ fn head_on_pairs(world: &mut PhysicsWorld) -> Setup {
             Vector::new(-speed, 0.0, 0.0),
             Vector::ZERO,
         );
-        for (body, other) in [(a, b), (b, a)] {
-            if let Some(&obstacle) = world
-                .bodies
-                .get(other)
-                .and_then(|rb| rb.colliders().first())
-            {
-                guards.push(Guard::Crossing { body, obstacle });
-            }
-        }
+        guards.extend(mutual_guards(world, a, b));
     }
     Setup {
         guards,

@@ -3,10 +3,10 @@
 //! sweeper, and a control scene where nothing is fast.
 
 use super::guard::Guard;
-use super::kit::{Lcg, crossing_guards, fixed_box};
+use super::kit::{Lcg, PaddleRow, crossing_guards, fixed_box};
 use super::script::{Motion, Script};
 use super::{Effects, Scene, Setup};
-use rapier3d::math::{Pose, Real, Rotation, Vector};
+use rapier3d::math::{Pose, Real, Vector};
 use rapier3d::parry::bounding_volume::Aabb;
 use rapier3d::prelude::{CoefficientCombineRule, ColliderBuilder, PhysicsWorld, RigidBodyBuilder};
 
@@ -323,34 +323,18 @@ fn kinematic_sweeper(world: &mut PhysicsWorld) -> Setup {
         Vector::new(0.0, -0.5, 0.0),
         Vector::new(20.0, 0.5, 20.0),
     );
-    let from = Vector::new(-6.0, 0.5, 0.0);
-    let to = Vector::new(6.0, 0.5, 0.0);
-    let paddle = world.insert_body(RigidBodyBuilder::kinematic_position_based().translation(from));
-    let blade = world.insert_collider(ColliderBuilder::cuboid(0.03, 0.5, 1.0), Some(paddle));
-    let mut boxes = Vec::new();
-    for k in 0..8 {
-        let at = Vector::new(-3.5 + k as Real, 0.2, 0.0);
-        let body = RigidBodyBuilder::dynamic().translation(at);
-        boxes.push(
-            world
-                .insert(body, ColliderBuilder::cuboid(0.2, 0.2, 0.2).friction(0.6))
-                .0,
-        );
-    }
     // 24 m per 0.4 s round trip: 60 m/s, 1 m per step.
-    let script = Script {
-        body: paddle,
-        motion: Motion::Slide {
-            from,
-            to,
-            rotation: Rotation::IDENTITY,
-            period: 0.4,
-        },
-    };
-    Setup {
-        guards: crossing_guards(&boxes, &[blade]),
-        scripts: vec![script],
+    PaddleRow {
+        from: Vector::new(-6.0, 0.5, 0.0),
+        to: Vector::new(6.0, 0.5, 0.0),
+        period: 0.4,
+        boxes: 8,
+        first: Vector::new(-3.5, 0.2, 0.0),
+        spacing: 1.0,
+        half: 0.2,
+        ccd: false,
     }
+    .build(world)
 }
 
 fn control_slow(world: &mut PhysicsWorld) -> Setup {

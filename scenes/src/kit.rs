@@ -187,3 +187,56 @@ pub fn all_at_rest(world: &PhysicsWorld, speed: Real, spin: Real) -> bool {
         .filter(|(_, rb)| rb.is_dynamic())
         .all(|(_, rb)| rb.linvel().length() < speed && rb.angvel().length() < spin)
 }
+
+/// A row of resting boxes and a position-based kinematic paddle (a blade
+/// 6 cm thick, 1 m tall, 2 m wide) scripted to slide through them along x.
+pub struct PaddleRow {
+    /// Where the paddle's slide starts and ends (its period is `period`).
+    pub from: Vector,
+    pub to: Vector,
+    /// Seconds for one round trip.
+    pub period: Real,
+    /// The boxes: how many, the first one's centre, the spacing along x,
+    /// the half extent.
+    pub boxes: usize,
+    pub first: Vector,
+    pub spacing: Real,
+    pub half: Real,
+    /// Whether the boxes have rapier's `ccd_enabled`.
+    pub ccd: bool,
+}
+
+impl PaddleRow {
+    /// Builds the paddle and the boxes; the guards say no box may end
+    /// behind the blade.
+    pub fn build(&self, world: &mut PhysicsWorld) -> super::Setup {
+        use super::script::{Motion, Script};
+        let paddle =
+            world.insert_body(RigidBodyBuilder::kinematic_position_based().translation(self.from));
+        let blade = world.insert_collider(ColliderBuilder::cuboid(0.03, 0.5, 1.0), Some(paddle));
+        let boxes: Vec<RigidBodyHandle> = (0..self.boxes)
+            .map(|k| {
+                let at = self.first + Vector::X * (self.spacing * k as Real);
+                let body = RigidBodyBuilder::dynamic()
+                    .translation(at)
+                    .ccd_enabled(self.ccd);
+                let collider =
+                    ColliderBuilder::cuboid(self.half, self.half, self.half).friction(0.6);
+                world.insert(body, collider).0
+            })
+            .collect();
+        let script = Script {
+            body: paddle,
+            motion: Motion::Slide {
+                from: self.from,
+                to: self.to,
+                rotation: Rotation::IDENTITY,
+                period: self.period,
+            },
+        };
+        super::Setup {
+            guards: crossing_guards(&boxes, &[blade]),
+            scripts: vec![script],
+        }
+    }
+}

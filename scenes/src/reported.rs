@@ -4,10 +4,11 @@
 //! (rapier#303), bodies sliding on a trimesh at a quarter-second step
 //! (rapier#217) and a small bouncing ball on a thin floor (rapier#932).
 
-use super::kit::{beyond_guards, crossing_guards, fixed_mesh, grid_mesh, mutual_guards, thin_wall};
-use super::script::{Motion, Script};
+use super::kit::{
+    PaddleRow, beyond_guards, crossing_guards, fixed_mesh, grid_mesh, mutual_guards, thin_wall,
+};
 use super::{Effects, Scene, Setup};
-use rapier3d::math::{Real, Rotation, Vector};
+use rapier3d::math::{Real, Vector};
 use rapier3d::prelude::{CoefficientCombineRule, ColliderBuilder, PhysicsWorld, RigidBodyBuilder};
 
 /// The scenes of this family.
@@ -147,40 +148,19 @@ fn kinematic_push(world: &mut PhysicsWorld) -> Setup {
         Vector::new(15.0, -0.5, 0.0),
         Vector::new(25.0, 0.5, 5.0),
     );
-    let from = Vector::new(-4.0, 0.5, 0.0);
-    let to = Vector::new(36.0, 0.5, 0.0);
-    let paddle = world.insert_body(RigidBodyBuilder::kinematic_position_based().translation(from));
-    let blade = world.insert_collider(ColliderBuilder::cuboid(0.03, 0.5, 1.0), Some(paddle));
-    let mut boxes = Vec::new();
-    for k in 0..6 {
-        let at = Vector::new(-2.5 + 1.1 * k as Real, 0.15, 0.0);
-        let body = RigidBodyBuilder::dynamic()
-            .translation(at)
-            .ccd_enabled(true);
-        boxes.push(
-            world
-                .insert(
-                    body,
-                    ColliderBuilder::cuboid(0.15, 0.15, 0.15).friction(0.6),
-                )
-                .0,
-        );
-    }
     // 40 m out in the first half of a 2 s round trip: 40 m/s, 0.67 m a step;
     // the 60-step run ends as the paddle reaches `to`, so it only goes one way.
-    let script = Script {
-        body: paddle,
-        motion: Motion::Slide {
-            from,
-            to,
-            rotation: Rotation::IDENTITY,
-            period: 2.0,
-        },
-    };
-    Setup {
-        guards: crossing_guards(&boxes, &[blade]),
-        scripts: vec![script],
+    PaddleRow {
+        from: Vector::new(-4.0, 0.5, 0.0),
+        to: Vector::new(36.0, 0.5, 0.0),
+        period: 2.0,
+        boxes: 6,
+        first: Vector::new(-2.5, 0.15, 0.0),
+        spacing: 1.1,
+        half: 0.15,
+        ccd: true,
     }
+    .build(world)
 }
 
 fn slide_dt025(world: &mut PhysicsWorld) -> Setup {
