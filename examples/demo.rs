@@ -31,10 +31,11 @@ struct Args {
     substeps: Option<u32>,
     json: Option<PathBuf>,
     svg: Option<PathBuf>,
+    profile: bool,
 }
 
 const USAGE: &str = "usage: demo [--scene NAME]... [--backend off|rapier|affine]... \
-[--steps N] [--epsilon X] [--substeps N] [--json FILE] [--svg DIR]";
+[--steps N] [--epsilon X] [--substeps N] [--json FILE] [--svg DIR] [--profile]";
 
 fn parse_args() -> Result<Args, String> {
     let mut args = Args::default();
@@ -70,6 +71,7 @@ fn parse_args() -> Result<Args, String> {
             }
             "--json" => args.json = Some(value()?.into()),
             "--svg" => args.svg = Some(value()?.into()),
+            "--profile" => args.profile = true,
             "-h" | "--help" => return Err(USAGE.to_string()),
             other => return Err(format!("unknown option `{other}`\n{USAGE}")),
         }
@@ -176,6 +178,9 @@ fn main() -> ExitCode {
     bar.finish_and_clear();
 
     print_table(&reports);
+    if args.profile {
+        print_profile(&reports);
+    }
     for backend in &unavailable {
         println!("{backend}: not built yet");
     }
@@ -226,6 +231,9 @@ fn reproduce(args: &Args) -> String {
     }
     if let Some(n) = args.substeps {
         parts.push(format!("--substeps {n}"));
+    }
+    if args.profile {
+        parts.push("--profile".to_string());
     }
     parts.join(" ")
 }
@@ -299,6 +307,42 @@ fn print_table(reports: &[SceneReport]) {
             r.steps,
             r.median_step_ms,
             ccd_cell(r)
+        );
+    }
+}
+
+/// Where the affine stage's time goes, per scene: per step, the bodies it
+/// swept, the collider pairs it queried, the pairs touching at the start
+/// (sampled, left to rapier), the late shallow contacts (left to rapier),
+/// the pair evaluations and the clamps; and its CCD time per step.
+fn print_profile(reports: &[SceneReport]) {
+    println!();
+    println!(
+        "{:<26} {:>8} {:>8} {:>9} {:>8} {:>11} {:>8} {:>9}",
+        "affine stage, per step",
+        "bodies",
+        "pairs",
+        "touching",
+        "shallow",
+        "evaluations",
+        "clamps",
+        "CCD ms"
+    );
+    for r in reports.iter().filter(|r| r.backend == Backend::Affine) {
+        let (Some(p), Some(ms)) = (r.profile, r.ccd_ms) else {
+            continue;
+        };
+        let per = |x: f64| x / p.steps.max(1) as f64;
+        println!(
+            "{:<26} {:>8.2} {:>8.2} {:>9.2} {:>8.2} {:>11.1} {:>8.3} {:>9.4}",
+            r.scene,
+            per(p.bodies_swept as f64),
+            per(p.pairs as f64),
+            per(p.touching as f64),
+            per(p.shallow as f64),
+            per(p.evaluations as f64),
+            per(p.clamps as f64),
+            per(ms)
         );
     }
 }

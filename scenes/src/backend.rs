@@ -80,6 +80,41 @@ pub trait Stepper {
     fn step(&mut self, world: &mut PhysicsWorld);
     /// Time spent in CCD over all steps so far, when the backend can tell.
     fn ccd_time(&self) -> Option<Duration>;
+    /// What the CCD stage did over all steps so far (affine only).
+    fn profile(&self) -> Option<StageProfile> {
+        None
+    }
+}
+
+/// The affine stage's work summed over a run: where its time goes.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct StageProfile {
+    /// Steps run.
+    pub steps: usize,
+    /// Bodies swept (first sweeps and re-sweeps).
+    pub bodies_swept: usize,
+    /// Collider pairs handed to the time-of-impact query.
+    pub pairs: usize,
+    /// Pairs touching at the start of a step (sampled, left to rapier).
+    pub touching: usize,
+    /// Contacts made too late in a step to get deep (left to rapier).
+    pub shallow: usize,
+    /// Pair evaluations the queries spent.
+    pub evaluations: u64,
+    /// Bodies clamped.
+    pub clamps: usize,
+}
+
+impl StageProfile {
+    fn add(&mut self, r: &affine_ccd::rapier::CcdReport) {
+        self.steps += 1;
+        self.bodies_swept += r.bodies_swept;
+        self.pairs += r.pairs;
+        self.touching += r.pairs_touching_at_start;
+        self.shallow += r.shallow_contacts;
+        self.evaluations += r.evaluations;
+        self.clamps += r.clamps();
+    }
 }
 
 /// Rapier with CCD disabled world-wide.
@@ -125,6 +160,7 @@ impl Stepper for Rapier {
 struct Affine {
     ccd: affine_ccd::rapier::AffineCcd,
     ccd_time: Duration,
+    profile: StageProfile,
 }
 
 impl Stepper for Affine {
@@ -133,11 +169,17 @@ impl Stepper for Affine {
     }
 
     fn step(&mut self, world: &mut PhysicsWorld) {
-        self.ccd_time += self.ccd.step(world).elapsed;
+        let report = self.ccd.step(world);
+        self.ccd_time += report.elapsed;
+        self.profile.add(report);
     }
 
     fn ccd_time(&self) -> Option<Duration> {
         Some(self.ccd_time)
+    }
+
+    fn profile(&self) -> Option<StageProfile> {
+        Some(self.profile)
     }
 }
 
@@ -159,6 +201,7 @@ pub fn make_stepper(backend: Backend, config: &BackendConfig) -> Option<Box<dyn 
             Some(Box::new(Affine {
                 ccd,
                 ccd_time: Duration::ZERO,
+                profile: StageProfile::default(),
             }))
         }
     }

@@ -2,7 +2,7 @@
 //! and what the fidelity counters ([`super::fidelity`]) saw.
 
 use super::Scene;
-pub use super::backend::{Backend, BackendConfig, Stepper, make_stepper};
+pub use super::backend::{Backend, BackendConfig, StageProfile, Stepper, make_stepper};
 use super::counter::{self, ContactKind};
 use super::fidelity::{self, EnergyMeter, FrozenCounter, RestGap};
 use super::guard::GuardWatch;
@@ -57,6 +57,8 @@ pub struct SceneReport {
     pub median_step_ms: f64,
     /// Total time spent in CCD (milliseconds), when the backend can measure it.
     pub ccd_ms: Option<f64>,
+    /// What the affine stage did over the run (`None` for other backends).
+    pub profile: Option<StageProfile>,
     /// The drawing material, when asked for.
     pub trace: Option<Trace>,
     /// Body-steps a dynamic body was held while its velocity said it moves,
@@ -190,6 +192,7 @@ pub fn run_scene(
         steps,
         median_step_ms: median_ms(&mut times),
         ccd_ms: stepper.ccd_time().map(|d| d.as_secs_f64() * 1e3),
+        profile: stepper.profile(),
         trace,
         frozen: frozen.count,
         deflected,
