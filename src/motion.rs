@@ -364,6 +364,14 @@ impl Motion {
         motion
     }
 
+    /// The same motion moved by a constant `offset` (world, metres) at every
+    /// time.
+    pub fn shifted(&self, offset: Vector3<f64>) -> Motion {
+        let mut motion = *self;
+        motion.center += offset;
+        motion
+    }
+
     /// The step length in seconds (0 for a fixed frame).
     pub fn dt(&self) -> f64 {
         self.dt
