@@ -1,0 +1,31 @@
+//! Headless: the tunnelling counts of a few bevy_rapier scenes, with
+//! bevy_rapier's own CCD (`Ccd::enabled()` on the fast bodies) and with
+//! `AffineCcdPlugin`.
+//!
+//! `cargo run --release -p affine-ccd-bevy --example bullets`
+
+#[path = "../tests/common/mod.rs"]
+mod common;
+
+use common::{Backend, Watch, blades, bullets, head_on, run};
+
+fn main() {
+    type Scene = fn(&mut bevy::prelude::App, usize) -> Vec<Watch>;
+    let scenes: [(&str, Scene, usize); 3] = [
+        ("bullets (150 m/s at a 6 cm wall)", bullets, 8),
+        ("head-on thin boxes (±150 m/s)", head_on, 8),
+        ("spinning blade (300 rad/s) by a wall", blades, 8),
+    ];
+    let updates = 120;
+    println!(
+        "{:<40} {:>6} {:>14} {:>12}",
+        "scene", "bodies", "bevy_rapier", "affine-ccd"
+    );
+    println!("{}", "-".repeat(75));
+    for (name, scene, n) in scenes {
+        let rapier = run(Backend::Rapier, scene, n, updates);
+        let affine = run(Backend::Affine, scene, n, updates);
+        println!("{name:<40} {n:>6} {rapier:>14} {affine:>12}");
+    }
+    println!("tunnelled bodies (pairs for head-on) after {updates} updates at 60 Hz");
+}
