@@ -153,8 +153,7 @@ where
         // is spawned (the steps add them too, for a context spawned before
         // the plugin was built).
         let _ = app.try_register_required_components::<RapierContextSimulation, AffineCcdStage>();
-        let _ =
-            app.try_register_required_components::<RapierContextSimulation, RemovedColliders>();
+        let _ = app.try_register_required_components::<RapierContextSimulation, RemovedColliders>();
     }
 
     /// bevy_rapier adds its systems in its `build`; by `finish` every

@@ -13,7 +13,10 @@
 //! quarantine of non-finite bodies. Contexts in `SimulationMode::CollisionOnly`
 //! have no dynamics to sweep: they go through bevy_rapier's own step as is.
 
-use crate::{AffineCcdConfig, AffineCcdStage, ContextCcdConfig, CcdHit, PluginCcdConfig, RemovedColliders, config_for};
+use crate::{
+    AffineCcdConfig, AffineCcdStage, CcdHit, ContextCcdConfig, PluginCcdConfig, RemovedColliders,
+    config_for,
+};
 use affine_ccd::rapier::CcdReport;
 use bevy::ecs::system::{StaticSystemParam, SystemParamItem};
 use bevy::prelude::*;
@@ -58,8 +61,12 @@ impl EventHandler for Events<'_> {
         let (h1, h2) = (event.collider1(), event.collider2());
         if let (Some(e1), Some(e2)) = (self.entity(colliders, h1), self.entity(colliders, h2)) {
             let ours = match event {
-                RapierCollisionEvent::Started(_, _, flags) => CollisionEvent::Started(e1, e2, flags),
-                RapierCollisionEvent::Stopped(_, _, flags) => CollisionEvent::Stopped(e1, e2, flags),
+                RapierCollisionEvent::Started(_, _, flags) => {
+                    CollisionEvent::Started(e1, e2, flags)
+                }
+                RapierCollisionEvent::Stopped(_, _, flags) => {
+                    CollisionEvent::Stopped(e1, e2, flags)
+                }
             };
             if let Ok(mut queue) = self.collisions.lock() {
                 queue.push(ours);
@@ -78,7 +85,8 @@ impl EventHandler for Events<'_> {
         contact_pair: &ContactPair,
         total_force_magnitude: Real,
     ) {
-        let raw = RapierContactForceEvent::from_contact_pair(dt, contact_pair, total_force_magnitude);
+        let raw =
+            RapierContactForceEvent::from_contact_pair(dt, contact_pair, total_force_magnitude);
         if let (Some(collider1), Some(collider2)) = (
             self.entity(colliders, raw.collider1),
             self.entity(colliders, raw.collider2),
@@ -135,6 +143,10 @@ impl<H: BevyPhysicsHooks> PhysicsHooks for Hooks<H> {
     }
 }
 
+fn take_queue<T>(queue: &Mutex<Vec<T>>) -> Vec<T> {
+    std::mem::take(&mut *queue.lock().unwrap_or_else(|e| e.into_inner()))
+}
+
 /// What the quarantine of the steps of one update caught, as entities.
 #[derive(Default)]
 struct Quarantined {
@@ -164,39 +176,72 @@ impl Context<'_> {
         quarantined: &mut Quarantined,
     ) {
         let sim = &mut *self.sim;
-        // The user's handler is reachable only through `&self` of the whole
-        // context: the parts the step mutates are moved out for the step
-        // (all four are cheap to default and are put back right after).
-        let mut pipeline = std::mem::take(&mut sim.pipeline);
-        let mut islands = std::mem::take(&mut sim.islands);
-        let mut broad_phase = std::mem::take(&mut sim.broad_phase);
-        let mut narrow_phase = std::mem::take(&mut sim.narrow_phase);
         let handler = Events {
             removed,
-            user: sim.event_handler(),
+            user: None,
             collisions: Mutex::new(std::mem::take(&mut events.0)),
             forces: Mutex::new(std::mem::take(&mut events.1)),
         };
-        let report = stage.stage.step_pipeline(
-            &mut pipeline,
-            gravity,
-            params,
-            &mut islands,
-            &mut broad_phase,
-            &mut narrow_phase,
-            &mut self.bodies.bodies,
-            &mut self.colliders.colliders,
-            &mut self.joints.impulse_joints,
-            &mut self.joints.multibody_joints,
-            &mut self.bodies.soft_bodies,
-            hooks,
-            &handler,
-        );
-        stage.reports.push(report.clone());
+        if sim.event_handler().is_none() {
+            let report = stage.stage.step_pipeline(
+                &mut sim.pipeline,
+                gravity,
+                params,
+                &mut sim.islands,
+                &mut sim.broad_phase,
+                &mut sim.narrow_phase,
+                &mut self.bodies.bodies,
+                &mut self.colliders.colliders,
+                &mut self.joints.impulse_joints,
+                &mut self.joints.multibody_joints,
+                &mut self.bodies.soft_bodies,
+                hooks,
+                &handler,
+            );
+            stage.reports.push(report.clone());
+        } else {
+            // The user's handler is reachable only through `&self` of the
+            // whole context: the parts the step mutates are moved out for
+            // the step and put back right after.
+            let mut pipeline = std::mem::take(&mut sim.pipeline);
+            let mut islands = std::mem::take(&mut sim.islands);
+            let mut broad_phase = std::mem::take(&mut sim.broad_phase);
+            let mut narrow_phase = std::mem::take(&mut sim.narrow_phase);
+            let with_user = Events {
+                removed,
+                user: sim.event_handler(),
+                collisions: Mutex::new(take_queue(&handler.collisions)),
+                forces: Mutex::new(take_queue(&handler.forces)),
+            };
+            let report = stage.stage.step_pipeline(
+                &mut pipeline,
+                gravity,
+                params,
+                &mut islands,
+                &mut broad_phase,
+                &mut narrow_phase,
+                &mut self.bodies.bodies,
+                &mut self.colliders.colliders,
+                &mut self.joints.impulse_joints,
+                &mut self.joints.multibody_joints,
+                &mut self.bodies.soft_bodies,
+                hooks,
+                &with_user,
+            );
+            stage.reports.push(report.clone());
+            *handler.collisions.lock().unwrap_or_else(|e| e.into_inner()) =
+                with_user.collisions.into_inner().unwrap_or_default();
+            *handler.forces.lock().unwrap_or_else(|e| e.into_inner()) =
+                with_user.forces.into_inner().unwrap_or_default();
+            sim.pipeline = pipeline;
+            sim.islands = islands;
+            sim.broad_phase = broad_phase;
+            sim.narrow_phase = narrow_phase;
+        }
         events.0 = handler.collisions.into_inner().unwrap_or_default();
         events.1 = handler.forces.into_inner().unwrap_or_default();
 
-        let quarantine = pipeline.quarantine();
+        let quarantine = sim.pipeline.quarantine();
         if !quarantine.is_empty() {
             quarantined.bodies.extend(
                 quarantine
@@ -217,10 +262,6 @@ impl Context<'_> {
                     .filter_map(|h| self.bodies.soft_body_entity(*h)),
             );
         }
-        sim.pipeline = pipeline;
-        sim.islands = islands;
-        sim.broad_phase = broad_phase;
-        sim.narrow_phase = narrow_phase;
     }
 }
 
@@ -340,11 +381,8 @@ pub fn step_simulation_with_ccd<Hooks>(
             Some(stage) => stage.into_inner(),
             None => fresh.insert(AffineCcdStage::default()),
         };
-        *stage.stage.config_mut() = config_for(
-            ccd_config,
-            config_res.as_deref(),
-            plugin_default.as_deref(),
-        );
+        *stage.stage.config_mut() =
+            config_for(ccd_config, config_res.as_deref(), plugin_default.as_deref());
         stage.reports.clear();
         let mut removed_now = removed
             .map(|mut r| std::mem::take(&mut r.0))
@@ -491,7 +529,9 @@ fn quarantine(
     log::warn!(
         "non-finite (NaN or infinite) state in rapier context {context}; rolled back and \
          disabled: bodies {:?}, colliders {:?}, soft bodies {:?}",
-        q.bodies, q.colliders, q.soft_bodies
+        q.bodies,
+        q.colliders,
+        q.soft_bodies
     );
     writer.write(PhysicsQuarantineEvent {
         context,
@@ -510,7 +550,11 @@ pub fn track_removed_colliders(
     mut removed: RemovedComponents<RapierColliderHandle>,
     still_there: Query<(), With<RapierColliderHandle>>,
     orphans: Query<(Entity, &RapierColliderHandle), Without<Collider>>,
-    mut contexts: Query<(Entity, &RapierContextColliders, Option<&mut RemovedColliders>)>,
+    mut contexts: Query<(
+        Entity,
+        &RapierContextColliders,
+        Option<&mut RemovedColliders>,
+    )>,
 ) {
     let gone: Vec<Entity> = removed
         .read()
@@ -537,9 +581,7 @@ pub fn track_removed_colliders(
         match map {
             Some(mut map) => map.0.extend(found),
             None => {
-                commands
-                    .entity(context)
-                    .try_insert(RemovedColliders(found));
+                commands.entity(context).try_insert(RemovedColliders(found));
             }
         }
     }

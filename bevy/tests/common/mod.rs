@@ -164,3 +164,25 @@ pub fn run(
     }
     tunnelled(&mut app, &watch)
 }
+
+/// Every collision event and clamp seen so far (read by a system, so each is
+/// seen once).
+#[derive(Resource, Default)]
+pub struct Seen {
+    pub collisions: Vec<CollisionEvent>,
+    pub hits: Vec<affine_ccd_bevy::CcdHit>,
+}
+
+pub fn record(app: &mut App) {
+    app.init_resource::<Seen>().add_systems(
+        Last,
+        |mut seen: ResMut<Seen>,
+         mut collisions: MessageReader<CollisionEvent>,
+         hits: Option<MessageReader<affine_ccd_bevy::CcdHit>>| {
+            seen.collisions.extend(collisions.read().copied());
+            if let Some(mut hits) = hits {
+                seen.hits.extend(hits.read().copied());
+            }
+        },
+    );
+}
