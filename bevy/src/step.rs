@@ -165,6 +165,7 @@ struct Context<'a> {
 
 impl Context<'_> {
     /// One rapier step through the stage; its report is pushed on `stage`.
+    #[allow(clippy::too_many_arguments)]
     fn step_once(
         &mut self,
         stage: &mut AffineCcdStage,
