@@ -8,7 +8,7 @@
 //!
 //! App::new()
 //!     .add_plugins((MinimalPlugins, RapierPhysicsPlugin::<NoUserData>::default()))
-//!     .add_plugins(AffineCcdPlugin::<NoUserData>::default()) // rapier's CCD out, affine-ccd's stage in
+//!     .add_plugins(AffineCcdPlugin::default()) // rapier's CCD out, affine-ccd's stage in
 //!     .run();
 //! ```
 //!
@@ -46,16 +46,24 @@ pub struct AffineCcdPlugin<PhysicsHooks = NoUserData> {
     _hooks: PhantomData<fn() -> PhysicsHooks>,
 }
 
-impl<H> Default for AffineCcdPlugin<H> {
+impl Default for AffineCcdPlugin<NoUserData> {
     fn default() -> Self {
         Self::new(CcdConfig::default())
     }
 }
 
-impl<H> AffineCcdPlugin<H> {
-    /// The stage's configuration for contexts without an [`AffineCcdConfig`]
-    /// component, when there is no [`AffineCcdConfig`] resource either.
+impl AffineCcdPlugin<NoUserData> {
+    /// The stage's configuration for contexts without a [`ContextCcdConfig`],
+    /// when there is no [`AffineCcdConfig`] resource either.
     pub fn new(config: CcdConfig) -> Self {
+        Self::with_hooks(config)
+    }
+}
+
+impl<H> AffineCcdPlugin<H> {
+    /// For `RapierPhysicsPlugin::<H>` with hooks `H` other than
+    /// `NoUserData`: `AffineCcdPlugin::<H>::with_hooks(config)`.
+    pub fn with_hooks(config: CcdConfig) -> Self {
         AffineCcdPlugin {
             config,
             _hooks: PhantomData,

@@ -26,7 +26,7 @@ pub fn app(backend: Backend) -> App {
     let mut app = App::new();
     app.add_plugins((MinimalPlugins, RapierPhysicsPlugin::<NoUserData>::default()));
     if backend == Backend::Affine {
-        app.add_plugins(AffineCcdPlugin::<NoUserData>::default());
+        app.add_plugins(AffineCcdPlugin::default());
     }
     app.insert_resource(TimestepMode::Fixed {
         dt: DT,
