@@ -5,8 +5,10 @@
 mod common;
 
 use bevy::prelude::*;
+use bevy::time::TimeUpdateStrategy;
 use bevy_rapier3d::prelude::*;
-use common::{Backend, app};
+use common::{Backend, DT, app};
+use std::time::Duration;
 
 fn slow_scene(app: &mut App) -> Vec<Entity> {
     // Every entity has the same components: bevy_rapier gives out handles
@@ -19,6 +21,7 @@ fn slow_scene(app: &mut App) -> Vec<Entity> {
         Transform::from_xyz(0.0, -0.1, 0.0),
         Velocity::zero(),
         ActiveEvents::COLLISION_EVENTS,
+        TransformInterpolation::default(),
     ));
     let mut bodies = Vec::new();
     for i in 0..6 {
@@ -31,6 +34,7 @@ fn slow_scene(app: &mut App) -> Vec<Entity> {
                         .with_rotation(Quat::from_rotation_x(0.1 * i as f32)),
                     Velocity::zero(),
                     ActiveEvents::COLLISION_EVENTS,
+                    TransformInterpolation::default(),
                 ))
                 .id(),
         );
@@ -45,6 +49,7 @@ fn slow_scene(app: &mut App) -> Vec<Entity> {
                     Transform::from_xyz(4.0 + 0.02 * i as f32, 0.21 + 0.41 * i as f32, -4.0),
                     Velocity::zero(),
                     ActiveEvents::COLLISION_EVENTS,
+                    TransformInterpolation::default(),
                 ))
                 .id(),
         );
@@ -58,6 +63,7 @@ fn slow_scene(app: &mut App) -> Vec<Entity> {
                     Transform::from_xyz(3.0, 0.25, 1.0 * i as f32),
                     Velocity::linear(Vec3::new(-1.0, 0.0, 0.5)),
                     ActiveEvents::COLLISION_EVENTS,
+                    TransformInterpolation::default(),
                 ))
                 .id(),
         );
@@ -65,8 +71,12 @@ fn slow_scene(app: &mut App) -> Vec<Entity> {
     bodies
 }
 
-fn final_poses(backend: Backend) -> (Vec<Transform>, usize) {
+fn final_poses(backend: Backend, mode: TimestepMode, frame: f32) -> (Vec<Transform>, usize) {
     let mut app = app(backend);
+    app.insert_resource(mode)
+        .insert_resource(TimeUpdateStrategy::ManualDuration(Duration::from_secs_f32(
+            frame,
+        )));
     let bodies = slow_scene(&mut app);
     common::record(&mut app);
     for _ in 0..300 {
@@ -86,14 +96,53 @@ fn final_poses(backend: Backend) -> (Vec<Transform>, usize) {
     (poses, started)
 }
 
-#[test]
-fn no_fast_bodies_same_transforms_and_events() {
-    let (rapier, rapier_events) = final_poses(Backend::Rapier);
-    let (affine, affine_events) = final_poses(Backend::Affine);
+fn same_as_bevy_rapier(mode: TimestepMode, frame: f32) {
+    let (rapier, rapier_events) = final_poses(Backend::Rapier, mode, frame);
+    let (affine, affine_events) = final_poses(Backend::Affine, mode, frame);
     for (a, b) in rapier.iter().zip(&affine) {
-        assert_eq!(a.translation, b.translation);
-        assert_eq!(a.rotation, b.rotation);
+        assert_eq!(a.translation, b.translation, "{mode:?}, frame {frame}");
+        assert_eq!(a.rotation, b.rotation, "{mode:?}, frame {frame}");
     }
     assert!(rapier_events > 0);
     assert_eq!(rapier_events, affine_events);
+}
+
+#[test]
+fn no_fast_bodies_same_transforms_and_events() {
+    same_as_bevy_rapier(
+        TimestepMode::Fixed {
+            dt: DT,
+            substeps: 1,
+        },
+        DT,
+    );
+}
+
+/// The timestep modes as bevy_rapier runs them: substeps, steps skipped or
+/// doubled by interpolation, the interpolated transforms written back.
+#[test]
+fn no_fast_bodies_same_in_every_timestep_mode() {
+    same_as_bevy_rapier(
+        TimestepMode::Fixed {
+            dt: DT,
+            substeps: 3,
+        },
+        DT,
+    );
+    let variable = TimestepMode::Variable {
+        max_dt: DT,
+        time_scale: 1.0,
+        substeps: 2,
+    };
+    same_as_bevy_rapier(variable, 0.7 * DT);
+    for frame in [0.4 * DT, 1.7 * DT] {
+        for time_scale in [1.0, 0.5] {
+            let interpolated = TimestepMode::Interpolated {
+                dt: DT,
+                time_scale,
+                substeps: 2,
+            };
+            same_as_bevy_rapier(interpolated, frame);
+        }
+    }
 }

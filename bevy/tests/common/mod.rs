@@ -164,12 +164,24 @@ pub fn run(
     n: usize,
     updates: usize,
 ) -> usize {
+    run_counting(backend, scene, n, updates).0
+}
+
+/// Runs a scene: (tunnelled, clamps by the plugin).
+pub fn run_counting(
+    backend: Backend,
+    scene: fn(&mut App, usize) -> Vec<Watch>,
+    n: usize,
+    updates: usize,
+) -> (usize, usize) {
     let mut app = app(backend);
     let watch = scene(&mut app, n);
+    record(&mut app);
     for _ in 0..updates {
         app.update();
     }
-    tunnelled(&mut app, &watch)
+    let clamps = app.world().resource::<Seen>().hits.len();
+    (tunnelled(&mut app, &watch), clamps)
 }
 
 /// Every collision event and clamp seen so far (read by a system, so each is
