@@ -21,8 +21,8 @@
 //! - Configuration: [`AffineCcdConfig`] as a resource (every context),
 //!   [`ContextCcdConfig`] on a context entity (that context); else the
 //!   plugin's.
-//! - Report: [`AffineCcdStage`] on each context entity (added on its first
-//!   step) holds the stage and the reports of the steps of the last update.
+//! - Report: [`AffineCcdStage`] on each context entity (a required component
+//!   of `RapierContextSimulation`) holds the stage and the reports of the steps of the last update.
 //! - Messages: one [`CcdHit`] per clamp, with entities.
 
 mod step;
@@ -86,8 +86,9 @@ pub struct ContextCcdConfig(pub CcdConfig);
 #[derive(Resource, Clone, Copy, Debug)]
 pub struct PluginCcdConfig(pub CcdConfig);
 
-/// The CCD stage of one context and what it did in the last update. Put on
-/// the context entity by the first step of that context.
+/// The CCD stage of one context and what it did in the last update, on the
+/// context entity (added with `RapierContextSimulation`, or by the first
+/// step of a context spawned before the plugin was built).
 #[derive(Component, Default)]
 pub struct AffineCcdStage {
     stage: AffineCcd,
@@ -216,25 +217,11 @@ where
         // bevy_rapier runs its removal systems in `PostUpdate` too when the
         // physics runs in another schedule: removals seen there are tracked
         // there.
-        let post_update = PostUpdate.intern();
         if replaced > 0 && !done_post_update {
-            let removals_there = app
-                .world()
-                .resource::<Schedules>()
-                .get(post_update)
-                .is_some_and(|s| {
-                    s.graph()
-                        .system_sets
-                        .contains(IntoSystemSet::into_system_set(
-                            bevy_rapier3d::plugin::systems::sync_removals,
-                        ))
-                });
-            if removals_there {
-                app.add_systems(
-                    post_update,
-                    track_removed_colliders.before(bevy_rapier3d::plugin::systems::sync_removals),
-                );
-            }
+            app.add_systems(
+                PostUpdate,
+                track_removed_colliders.before(bevy_rapier3d::plugin::systems::sync_removals),
+            );
         }
     }
 }

@@ -158,3 +158,47 @@ fn a_context_config_is_used() {
     assert_eq!(stage.stage().config().epsilon, 1.0e-3);
     assert_eq!(stage.reports().len(), 1);
 }
+
+#[test]
+fn in_fixed_update_removed_colliders_keep_their_entities() {
+    let mut counts = Vec::new();
+    for backend in [Backend::Rapier, Backend::Affine] {
+        let mut app = fixed_app(backend);
+        common::record(&mut app);
+        app.world_mut().spawn((
+            Collider::ball(0.5),
+            Sensor,
+            Transform::from_xyz(0.0, 0.0, 0.0),
+            ActiveEvents::COLLISION_EVENTS,
+        ));
+        let ball = app
+            .world_mut()
+            .spawn((
+                RigidBody::Dynamic,
+                Collider::ball(0.1),
+                Transform::from_xyz(0.0, 0.0, 0.0),
+                GravityScale(0.0),
+            ))
+            .id();
+        for i in 0..20 {
+            if i == 5 {
+                app.world_mut().despawn(ball);
+            }
+            app.update();
+        }
+        let seen = app.world().resource::<common::Seen>();
+        counts.push(
+            seen.collisions
+                .iter()
+                .filter(|e| {
+                    matches!(e, CollisionEvent::Stopped(a, b, flags)
+                    if (*a == ball || *b == ball)
+                        && flags.contains(
+                            bevy_rapier3d::rapier::geometry::CollisionEventFlags::REMOVED,
+                        ))
+                })
+                .count(),
+        );
+    }
+    assert_eq!(counts, [1, 1]);
+}
