@@ -5,7 +5,8 @@
 
 use super::backoff::{BACKOFF, back_off, pair_travel};
 use super::report::CcdReport;
-use crate::convert::pose_from_iso;
+use crate::InitialContact;
+use crate::convert::{pose_from_iso, vec_from_glam};
 use crate::enclosure::TimeSpan;
 use crate::error::CcdError;
 use crate::motion::{Motion, Trajectory};
@@ -65,35 +66,8 @@ pub(super) fn touching_pair(
     if travel <= allowed + gap0 {
         return Ok(None);
     }
-    // Cheap proof that the pair never gets deeper than allowed: shifted
-    // `allowed` back along the start contact normal, the moving shape never
-    // touches the target (one sound query); the shift then separates them at
-    // every time, so the depth (parry's: the least translation apart) stays
-    // within `allowed`. When the shifted shape does touch, the normal may
-    // just have turned: the samples below decide. Only for a convex target:
-    // against a mesh parry measures the depth along each triangle's own
-    // normal, which no single shift bounds (a slab resting across terrain
-    // triangles was proved within 5 mm while parry, and the solver, saw
-    // 12 mm along a neighbouring triangle's normal).
-    let convex = s2.is_convex() || s2.as_halfspace().is_some();
-    if convex
-        && let Some((_, Some(c))) = gap_at(s1, m1, s2, m2, lo, opts.skin.max(allowed) + 1.0e-2)
-    {
-        let back = -crate::convert::vec_from_glam(c.normal1) * (allowed * (1.0 + 1.0e-6));
-        let shifted = m1.shifted(back);
-        let apart = QueryOptions {
-            skin: 0.0,
-            initial_contact: crate::InitialContact::Report,
-            ..*opts
-        };
-        if let Ok(found) = time_of_impact(s1, &shifted, s2, m2, &apart) {
-            if let Some(toi) = &found {
-                report.evaluations += toi.stats.pair_evaluations;
-            }
-            if found.is_none() {
-                return Ok(None);
-            }
-        }
+    if proved_within(moving, target, allowed, opts, report) {
+        return Ok(None);
     }
     let samples = ((travel / sink).ceil() as usize).clamp(4, MAX_TOUCH_SAMPLES);
     // parry's contact only needs to look as far as a sample can move: a
@@ -151,4 +125,45 @@ pub(super) fn touching_pair(
         prev = tau;
     }
     Ok(None)
+}
+
+/// Cheap proof that a touching pair never gets deeper than `allowed`:
+/// shifted `allowed` back along the start contact normal, the moving shape
+/// never touches the target (one sound query); the shift then separates
+/// them at every time, so the depth (parry's: the least translation apart)
+/// stays within `allowed`. `false` when the shifted shape does touch (the
+/// normal may just have turned: the caller samples) or nothing could be
+/// proved. Only for a convex target: against a mesh parry measures the
+/// depth along each triangle's own normal, which no single shift bounds (a
+/// slab resting across terrain triangles was proved within 5 mm while
+/// parry, and the solver, saw 12 mm along a neighbouring triangle's normal).
+fn proved_within(
+    moving: &ShapeMotion,
+    target: &ShapeMotion,
+    allowed: f64,
+    opts: &QueryOptions,
+    report: &mut CcdReport,
+) -> bool {
+    let (s1, m1, s2, m2) = (moving.shape, &moving.motion, target.shape, &target.motion);
+    if !(s2.is_convex() || s2.as_halfspace().is_some()) {
+        return false;
+    }
+    let lo = opts.time_range.lo;
+    let Some((_, Some(c))) = gap_at(s1, m1, s2, m2, lo, opts.skin.max(allowed) + 1.0e-2) else {
+        return false;
+    };
+    let back = -vec_from_glam(c.normal1) * (allowed * (1.0 + 1.0e-6));
+    let apart = QueryOptions {
+        skin: 0.0,
+        initial_contact: InitialContact::Report,
+        ..*opts
+    };
+    match time_of_impact(s1, &m1.shifted(back), s2, m2, &apart) {
+        Ok(None) => true,
+        Ok(Some(toi)) => {
+            report.evaluations += toi.stats.pair_evaluations;
+            false
+        }
+        Err(_) => false,
+    }
 }
