@@ -13,28 +13,9 @@ use bevy_rapier3d::rapier::prelude::SolverFlags;
 use common::{Backend, DT, Watch, bullets, head_on, tunnelled};
 use std::time::Duration;
 
+/// The plugin with bevy_rapier in `FixedUpdate`.
 fn fixed_app(backend: Backend) -> App {
-    let mut app = App::new();
-    app.add_plugins((
-        MinimalPlugins,
-        RapierPhysicsPlugin::<NoUserData>::default().in_fixed_schedule(),
-    ));
-    if backend == Backend::Affine {
-        app.add_plugins(AffineCcdPlugin::default());
-    }
-    app.insert_resource(TimestepMode::Fixed {
-        dt: DT,
-        substeps: 1,
-    })
-    .insert_resource(Time::<Fixed>::from_seconds(DT as f64))
-    .insert_resource(TimeUpdateStrategy::ManualDuration(Duration::from_secs_f32(
-        DT,
-    )));
-    app.finish();
-    app.cleanup();
-    app.update();
-    while app.world_mut().spawn_empty().id().index_u32() < 99 {}
-    app
+    common::app_in(backend, true)
 }
 
 #[test]

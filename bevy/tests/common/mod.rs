@@ -23,8 +23,19 @@ pub const DT: f32 = 1.0 / 60.0;
 /// A headless app stepping at a fixed 60 Hz, one step per update, with a
 /// manual clock (deterministic).
 pub fn app(backend: Backend) -> App {
+    app_in(backend, false)
+}
+
+/// [`app`], with bevy_rapier in `FixedUpdate` when `fixed_schedule`.
+pub fn app_in(backend: Backend, fixed_schedule: bool) -> App {
     let mut app = App::new();
-    app.add_plugins((MinimalPlugins, RapierPhysicsPlugin::<NoUserData>::default()));
+    let rapier = RapierPhysicsPlugin::<NoUserData>::default();
+    if fixed_schedule {
+        app.add_plugins((MinimalPlugins, rapier.in_fixed_schedule()))
+            .insert_resource(Time::<Fixed>::from_seconds(DT as f64));
+    } else {
+        app.add_plugins((MinimalPlugins, rapier));
+    }
     if backend == Backend::Affine {
         app.add_plugins(AffineCcdPlugin::default());
     }
