@@ -15,7 +15,7 @@ use crate::motion::{Motion, Trajectory};
 use crate::query::{QueryOptions, ShapeMotion, Toi, Witness, time_of_impact, time_of_impact_many};
 use crate::solve::RootStatus;
 use rapier3d::parry::bounding_volume::BoundingVolume;
-use rapier3d::parry::query::QueryDispatcher;
+use rapier3d::parry::query::{Contact, QueryDispatcher};
 use rapier3d::parry::shape::Shape;
 use rapier3d::prelude::RigidBodyHandle;
 use rapier3d::prelude::{BroadPhaseBvh, ColliderHandle};
@@ -107,11 +107,12 @@ fn earliest(
         }
     };
     let lo = opts.time_range.lo;
-    // A small prediction finds the contact of a pair within the skin.
-    let reach = opts.skin + 1.0e-2;
-    let touching = |j: usize, gap: f64, report: &mut CcdReport| {
+    // A small prediction finds the contact of a pair within the skin, or
+    // within the allowed sinking (which `touching_pair` reads it for).
+    let reach = opts.skin.max(sink) + 1.0e-2;
+    let touching = |j: usize, start: (f64, Option<Contact>), report: &mut CcdReport| {
         report.pairs_touching_at_start += 1;
-        touching_pair(moving, &targets[j], gap, sink, opts, report)
+        touching_pair(moving, &targets[j], start, sink, opts, report)
     };
     let mut alive: Vec<usize> = Vec::with_capacity(targets.len());
     // parry's contact costs GJK (and EPA when touching): ask it only for
@@ -125,8 +126,8 @@ fn earliest(
             continue;
         }
         match gap_at(moving.shape, &moving.motion, t.shape, &t.motion, lo, reach) {
-            Some((gap, _)) if gap <= opts.skin => {
-                if let Some(toi) = touching(j, gap, report)? {
+            Some(start) if start.0 <= opts.skin => {
+                if let Some(toi) = touching(j, start, report)? {
                     keep(Earliest {
                         toi,
                         target: j,
@@ -171,11 +172,11 @@ fn earliest(
         }
         // The pair touches at the start after all (parry saw it apart).
         alive.remove(many.target);
-        let Some((gap, _)) = gap_at(moving.shape, &moving.motion, t.shape, &t.motion, lo, reach)
+        let Some(start) = gap_at(moving.shape, &moving.motion, t.shape, &t.motion, lo, reach)
         else {
             continue;
         };
-        if let Some(toi) = touching(j, gap, report)? {
+        if let Some(toi) = touching(j, start, report)? {
             keep(Earliest {
                 toi,
                 target: j,

@@ -52,12 +52,13 @@ const MAX_TOUCH_SAMPLES: usize = 64;
 pub(super) fn touching_pair(
     moving: &ShapeMotion,
     target: &ShapeMotion,
-    gap0: f64,
+    start: (f64, Option<Contact>),
     sink: f64,
     opts: &QueryOptions,
     report: &mut CcdReport,
 ) -> Result<Option<Toi>, CcdError> {
     let (s1, m1, s2, m2) = (moving.shape, &moving.motion, target.shape, &target.motion);
+    let (gap0, contact0) = start;
     let allowed = (-gap0).max(sink);
     let lo = opts.time_range.lo;
     let hi = opts.time_range.hi;
@@ -66,7 +67,9 @@ pub(super) fn touching_pair(
     if travel <= allowed + gap0 {
         return Ok(None);
     }
-    if proved_within(moving, target, allowed, opts, report) {
+    if let Some(c) = &contact0
+        && proved_within(moving, target, c, allowed, opts, report)
+    {
         return Ok(None);
     }
     let samples = ((travel / sink).ceil() as usize).clamp(4, MAX_TOUCH_SAMPLES);
@@ -128,7 +131,8 @@ pub(super) fn touching_pair(
 }
 
 /// Cheap proof that a touching pair never gets deeper than `allowed`:
-/// shifted `allowed` back along the start contact normal, the moving shape
+/// shifted `allowed` back along the normal of its contact at the start,
+/// `start`, the moving shape
 /// never touches the target (one sound query); the shift then separates
 /// them at every time, so the depth (parry's: the least translation apart)
 /// stays within `allowed`. `false` when the shifted shape does touch (the
@@ -140,6 +144,7 @@ pub(super) fn touching_pair(
 fn proved_within(
     moving: &ShapeMotion,
     target: &ShapeMotion,
+    start: &Contact,
     allowed: f64,
     opts: &QueryOptions,
     report: &mut CcdReport,
@@ -148,10 +153,7 @@ fn proved_within(
     if !(s2.is_convex() || s2.as_halfspace().is_some()) {
         return false;
     }
-    let lo = opts.time_range.lo;
-    let Some((_, Some(c))) = gap_at(s1, m1, s2, m2, lo, opts.skin.max(allowed) + 1.0e-2) else {
-        return false;
-    };
+    let c = start;
     let back = -vec_from_glam(c.normal1) * (allowed * (1.0 + 1.0e-6));
     let apart = QueryOptions {
         skin: 0.0,
