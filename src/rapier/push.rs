@@ -9,12 +9,11 @@ use super::candidates::body_box;
 use super::clamp;
 use super::moved::Moved;
 use super::report::{CcdReport, SkipReason};
-use super::sweep::{self, Workspace};
-use super::world::{StageWorld, StepMotions};
+use super::sweep::{self, Sweeper, Workspace};
+use super::world::StepMotions;
 use crate::query::QueryOptions;
 use rapier3d::parry::bounding_volume::Aabb;
-use rapier3d::parry::query::QueryDispatcher;
-use rapier3d::prelude::{BroadPhaseBvh, QueryFilter, RigidBodyHandle, Vector};
+use rapier3d::prelude::{QueryFilter, RigidBodyHandle, Vector};
 use std::collections::{HashMap, HashSet};
 
 /// Most bodies one step's pushers carry.
@@ -40,25 +39,15 @@ struct Cand {
 /// (their motions are final once they join). Returns the carried bodies
 /// (index into `current`), their impacts and velocities; `front` ends with
 /// the pushers and the carried bodies.
-#[allow(clippy::too_many_arguments)]
 pub(super) fn push(
-    scene: &StageWorld,
-    broad_phase: &BroadPhaseBvh,
-    dispatcher: &dyn QueryDispatcher,
+    q: &Sweeper,
     current: &mut Vec<Moved>,
     front: &mut HashSet<RigidBodyHandle>,
-    dt: f64,
     opts: &QueryOptions,
     ws: &mut Workspace,
     report: &mut CcdReport,
 ) -> Vec<(usize, sweep::BodyHit, Vector)> {
-    let query = Sweeper {
-        scene,
-        broad_phase,
-        dispatcher,
-        dt,
-        opts,
-    };
+    let (scene, dt) = (q.scene, q.dt);
     let mut out = Vec::new();
     let mut cands: Vec<Cand> = Vec::new();
     let mut seen: HashSet<RigidBodyHandle> = front.clone();
@@ -70,10 +59,10 @@ pub(super) fn push(
         .filter_map(|m| body_box(scene, m))
         .collect();
     for b in boxes {
-        query.gather_near(current, &mut seen, b, &mut cands);
+        gather_near(q, current, &mut seen, b, &mut cands);
     }
     while out.len() < MAX_CARRIED {
-        query.sweep_candidates(current, &mut cands, front, &fresh, ws, report);
+        sweep_candidates(q, opts, current, &mut cands, front, &fresh, ws, report);
         fresh.clear();
         // The earliest impact of any candidate is carried first.
         let Some(k) = (0..cands.len())
@@ -104,7 +93,7 @@ pub(super) fn push(
                 fresh.insert(h);
                 out.push((i, hit, v));
                 if let Some(b) = body_box(scene, &current[i]) {
-                    query.gather_near(current, &mut seen, b, &mut cands);
+                    gather_near(q, current, &mut seen, b, &mut cands);
                 }
             }
             Err(e) => report.skip(current[i].handle, SkipReason::Query(e.to_string())),
@@ -113,124 +102,115 @@ pub(super) fn push(
     out
 }
 
-/// What every push sweep of the step reads.
-struct Sweeper<'w, 's> {
-    scene: &'w StageWorld<'s>,
-    broad_phase: &'w BroadPhaseBvh,
-    dispatcher: &'w dyn QueryDispatcher,
-    dt: f64,
-    opts: &'w QueryOptions,
+/// Adds as candidates the dynamic bodies not seen yet whose colliders
+/// meet `b` (a body at rest joins `current` with a motion that stays).
+fn gather_near(
+    q: &Sweeper,
+    current: &mut Vec<Moved>,
+    seen: &mut HashSet<RigidBodyHandle>,
+    b: Aabb,
+    cands: &mut Vec<Cand>,
+) {
+    let scene = q.scene;
+    let query = q.broad_phase.as_query_pipeline(
+        q.dispatcher,
+        scene.bodies,
+        scene.colliders,
+        QueryFilter::default(),
+    );
+    for (_, co) in query.intersect_aabb_conservative(b) {
+        let Some(h) = co.parent() else { continue };
+        if !seen.insert(h) {
+            continue;
+        }
+        let Some(rb) = scene.bodies.get(h) else {
+            continue;
+        };
+        if !rb.is_dynamic() || !rb.is_enabled() || scene.config.opted_out(rb.user_data) {
+            continue;
+        }
+        let i = match current.iter().position(|m| m.handle == h) {
+            Some(i) => i,
+            None => {
+                current.push(Moved {
+                    handle: h,
+                    start: *rb.position(),
+                    end: *rb.position(),
+                    angvel: Vector::ZERO,
+                    accel: Vector::ZERO,
+                    fast: false,
+                    pusher: false,
+                    travel: 0.0,
+                });
+                current.len() - 1
+            }
+        };
+        cands.push(Cand {
+            i,
+            best: None,
+            swept: false,
+            done: false,
+        });
+    }
 }
 
-impl Sweeper<'_, '_> {
-    /// Adds as candidates the dynamic bodies not seen yet whose colliders
-    /// meet `b` (a body at rest joins `current` with a motion that stays).
-    fn gather_near(
-        &self,
-        current: &mut Vec<Moved>,
-        seen: &mut HashSet<RigidBodyHandle>,
-        b: Aabb,
-        cands: &mut Vec<Cand>,
-    ) {
-        let scene = self.scene;
-        let query = self.broad_phase.as_query_pipeline(
-            self.dispatcher,
-            scene.bodies,
-            scene.colliders,
-            QueryFilter::default(),
-        );
-        for (_, co) in query.intersect_aabb_conservative(b) {
-            let Some(h) = co.parent() else { continue };
-            if !seen.insert(h) {
-                continue;
-            }
-            let Some(rb) = scene.bodies.get(h) else {
-                continue;
-            };
-            if !rb.is_dynamic() || !rb.is_enabled() || scene.config.opted_out(rb.user_data) {
-                continue;
-            }
-            let i = match current.iter().position(|m| m.handle == h) {
-                Some(i) => i,
-                None => {
-                    current.push(Moved {
-                        handle: h,
-                        start: *rb.position(),
-                        end: *rb.position(),
-                        angvel: Vector::ZERO,
-                        accel: Vector::ZERO,
-                        fast: false,
-                        pusher: false,
-                        travel: 0.0,
-                    });
-                    current.len() - 1
-                }
-            };
-            cands.push(Cand {
-                i,
-                best: None,
-                swept: false,
-                done: false,
-            });
+/// Sweeps each open candidate against the front (a candidate swept
+/// before only against its new members, `fresh`), keeping its earliest
+/// impact. A candidate the front drives into from the start is hit at 0.
+#[allow(clippy::too_many_arguments)]
+fn sweep_candidates(
+    q: &Sweeper,
+    opts: &QueryOptions,
+    current: &[Moved],
+    cands: &mut [Cand],
+    front: &HashSet<RigidBodyHandle>,
+    fresh: &HashSet<RigidBodyHandle>,
+    ws: &mut Workspace,
+    report: &mut CcdReport,
+) {
+    let scene = q.scene;
+    let reach = 2.0 * opts.skin + 1.0e-4;
+    let motions = StepMotions::new(current, q.dt);
+    ws.motions.clear();
+    for c in cands.iter_mut().filter(|c| !c.done) {
+        let set = if c.swept { fresh } else { front };
+        c.swept = true;
+        if set.is_empty() {
+            continue;
         }
-    }
-
-    /// Sweeps each open candidate against the front (a candidate swept
-    /// before only against its new members, `fresh`), keeping its earliest
-    /// impact. A candidate the front drives into from the start is hit at 0.
-    fn sweep_candidates(
-        &self,
-        current: &[Moved],
-        cands: &mut [Cand],
-        front: &HashSet<RigidBodyHandle>,
-        fresh: &HashSet<RigidBodyHandle>,
-        ws: &mut Workspace,
-        report: &mut CcdReport,
-    ) {
-        let scene = self.scene;
-        let reach = 2.0 * self.opts.skin + 1.0e-4;
-        let motions = StepMotions::new(current, self.dt);
-        ws.motions.clear();
-        for c in cands.iter_mut().filter(|c| !c.done) {
-            let set = if c.swept { fresh } else { front };
-            c.swept = true;
-            if set.is_empty() {
-                continue;
-            }
-            let body = &current[c.i];
-            let touching = set.iter().find_map(|h| {
-                let p = motions.body(*h)?;
-                sweep::pushed_at_start(scene, body, p, reach, scene.config.sink)
-            });
-            let hit = match touching {
-                Some(hit) => Some(hit),
-                None => {
-                    report.bodies_swept += 1;
-                    match sweep::sweep_body(
-                        scene,
-                        self.broad_phase,
-                        self.dispatcher,
-                        &motions,
-                        body,
-                        sweep::Targets::Only(set),
-                        self.opts,
-                        ws,
-                        report,
-                        &mut Vec::new(),
-                    ) {
-                        Ok(hit) => hit.filter(|h| h.toi.fraction < 1.0),
-                        Err(e) => {
-                            report.skip(body.handle, SkipReason::Query(e.to_string()));
-                            None
-                        }
+        let body = &current[c.i];
+        let touching = set.iter().find_map(|h| {
+            let p = motions.body(*h)?;
+            sweep::pushed_at_start(scene, body, p, reach, scene.config.sink)
+        });
+        let hit = match touching {
+            Some(hit) => Some(hit),
+            None => {
+                report.bodies_swept += 1;
+                match sweep::sweep_body(
+                    scene,
+                    q.broad_phase,
+                    q.dispatcher,
+                    &motions,
+                    body,
+                    sweep::Targets::Only(set),
+                    opts,
+                    ws,
+                    report,
+                    &mut Vec::new(),
+                ) {
+                    Ok(hit) => hit.filter(|h| h.toi.fraction < 1.0),
+                    Err(e) => {
+                        report.skip(body.handle, SkipReason::Query(e.to_string()));
+                        None
                     }
                 }
-            };
-            if let Some(hit) = hit
-                && c.best.is_none_or(|b| hit.toi.fraction < b.toi.fraction)
-            {
-                c.best = Some(hit);
             }
+        };
+        if let Some(hit) = hit
+            && c.best.is_none_or(|b| hit.toi.fraction < b.toi.fraction)
+        {
+            c.best = Some(hit);
         }
     }
 }

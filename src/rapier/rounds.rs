@@ -7,11 +7,10 @@ use super::clamp;
 use super::moved::Moved;
 use super::push;
 use super::report::{CcdReport, SkipReason};
-use super::sweep::{self, SensorPair, Workspace};
+use super::sweep::{self, SensorPair, Sweeper, Workspace};
 use super::world::{StageWorld, StepMotions};
 use crate::query::QueryOptions;
 use rapier3d::parry::bounding_volume::BoundingVolume;
-use rapier3d::parry::query::QueryDispatcher;
 use rapier3d::prelude::{BroadPhaseBvh, NarrowPhase, RigidBodyHandle, Vector};
 use std::collections::HashSet;
 
@@ -104,14 +103,6 @@ pub(crate) fn sweep_rounds(
     rounds.into_plan()
 }
 
-/// What every sweep of the step reads.
-struct Sweeper<'w, 's> {
-    scene: &'w StageWorld<'s>,
-    broad_phase: &'w BroadPhaseBvh,
-    dispatcher: &'w dyn QueryDispatcher,
-    dt: f64,
-}
-
 /// The state carried from one round to the next.
 struct Rounds {
     /// The moved bodies, each with its motion as cut so far.
@@ -164,17 +155,7 @@ impl Rounds {
         report: &mut CcdReport,
     ) -> Vec<(usize, Against)> {
         if !self.pushing.is_empty() {
-            let pushed = push::push(
-                q.scene,
-                q.broad_phase,
-                q.dispatcher,
-                &mut self.current,
-                &mut self.pushing,
-                q.dt,
-                opts,
-                ws,
-                report,
-            );
+            let pushed = push::push(q, &mut self.current, &mut self.pushing, opts, ws, report);
             // Pushing may add bodies that were at rest (not moved).
             let n = self.current.len();
             self.scale.resize(n, 1.0);

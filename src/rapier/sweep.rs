@@ -58,6 +58,15 @@ pub(crate) enum Targets<'a> {
     Blockers(&'a HashSet<RigidBodyHandle>),
 }
 
+/// What every sweep of one step reads: the world, its broad phase and
+/// query dispatcher, and the step length (seconds).
+pub(crate) struct Sweeper<'w, 's> {
+    pub scene: &'w StageWorld<'s>,
+    pub broad_phase: &'w BroadPhaseBvh,
+    pub dispatcher: &'w dyn QueryDispatcher,
+    pub dt: f64,
+}
+
 /// Reused buffers; `motions` caches target motions for one step (clear it
 /// between steps).
 #[derive(Default)]
