@@ -5,7 +5,10 @@
 //! `cargo test --release --test fidelity -- --nocapture` prints the numbers
 //! beside rapier's own CCD.
 
-use affine_ccd::rapier::AffineCcd;
+mod common;
+
+use affine_ccd::rapier::CcdConfig;
+use common::Run;
 use rapier3d::prelude::*;
 
 /// Who steps the world.
@@ -17,20 +20,10 @@ enum Ccd {
     Affine,
 }
 
-fn stepper(ccd: Ccd, world: &mut PhysicsWorld) -> Option<AffineCcd> {
-    (ccd == Ccd::Affine).then(|| {
-        let stage = AffineCcd::default();
-        stage.install(world);
-        stage
-    })
-}
-
-fn step(stage: &mut Option<AffineCcd>, world: &mut PhysicsWorld) {
-    match stage {
-        Some(s) => {
-            s.step(world);
-        }
-        None => world.step(),
+fn run(ccd: Ccd, world: PhysicsWorld) -> Run {
+    match ccd {
+        Ccd::Affine => Run::affine(world, CcdConfig::default()),
+        Ccd::Rapier => Run::rapier(world),
     }
 }
 
@@ -65,11 +58,11 @@ fn drop_slab(ccd: Ccd, axis: Vector, tilt: f32) -> Landing {
         .rotation(axis * tilt)
         .ccd_enabled(ccd == Ccd::Rapier);
     let (slab, _) = world.insert(body, ColliderBuilder::cuboid(1.0, 0.03, 1.0));
-    let mut stage = stepper(ccd, &mut world);
+    let mut run = run(ccd, world);
     let (mut rest_from, mut late_speed) = (None, 0.0f32);
     for k in 0..600 {
-        step(&mut stage, &mut world);
-        let rb = &world.bodies[slab];
+        run.step();
+        let rb = &run.world.bodies[slab];
         let up = rb.rotation() * Vector::Y;
         let tilt_now = up.y.clamp(-1.0, 1.0).acos();
         let (v, w) = (rb.linvel().length(), rb.angvel().length());
@@ -86,7 +79,7 @@ fn drop_slab(ccd: Ccd, axis: Vector, tilt: f32) -> Landing {
     Landing {
         rest_from,
         late_speed,
-        height: world.bodies[slab].translation().y,
+        height: run.world.bodies[slab].translation().y,
     }
 }
 
@@ -142,11 +135,11 @@ fn pass_edge(ccd: Ccd, gap: f32, x0: f32) -> f32 {
             .ccd_enabled(ccd == Ccd::Rapier),
         ColliderBuilder::ball(0.1),
     );
-    let mut stage = stepper(ccd, &mut world);
+    let mut run = run(ccd, world);
     for _ in 0..8 {
-        step(&mut stage, &mut world);
+        run.step();
     }
-    (world.bodies[ball].linvel() - v0).length()
+    (run.world.bodies[ball].linvel() - v0).length()
 }
 
 /// The velocity change of an inelastic contact at first touch for a graze
