@@ -8,7 +8,7 @@ use super::fidelity::{self, EnergyMeter, FrozenCounter, RestGap};
 use super::guard::GuardWatch;
 use super::snapshot::{BodyState, Snapshot};
 use super::svg::Trace;
-use rapier3d::prelude::{RigidBodyHandle, Vector};
+use rapier3d::prelude::{PhysicsWorld, Real, RigidBodyHandle, Vector};
 use std::fmt;
 use std::time::{Duration, Instant};
 
@@ -21,6 +21,10 @@ pub struct RunOptions {
     pub backend: BackendConfig,
     /// Keep trajectories and event positions for an SVG drawing.
     pub trace: bool,
+    /// Metres every dynamic body is raised (against gravity; along y
+    /// without it) before the first step: a perturbation for telling how
+    /// reproducible a run's outcome is (see [`SceneReport::compare_rest`]).
+    pub lift: Real,
 }
 
 /// Why a scene could not run.
@@ -132,6 +136,9 @@ pub fn run_scene(
     let mut stepper =
         make_stepper(backend, &options.backend).ok_or(RunError::Unavailable(backend))?;
     let (mut world, setup) = scene.instantiate();
+    if options.lift != 0.0 {
+        lift_dynamic_bodies(&mut world, options.lift);
+    }
     stepper.install(&mut world);
     let steps = options.steps.unwrap_or(scene.steps);
     let mut watch = GuardWatch::new(&world, &setup.guards);
@@ -203,6 +210,18 @@ pub fn run_scene(
         up: (-world.gravity).try_normalize().unwrap_or(Vector::Y),
         rest: None,
     })
+}
+
+/// Raises every dynamic body by `by` metres against gravity.
+fn lift_dynamic_bodies(world: &mut PhysicsWorld, by: Real) {
+    let up = (-world.gravity).try_normalize().unwrap_or(Vector::Y);
+    for (_, rb) in world.bodies.iter_mut() {
+        if rb.is_dynamic() {
+            let mut pose = *rb.position();
+            pose.translation += up * by;
+            rb.set_position(pose, true);
+        }
+    }
 }
 
 /// Median of `times` in milliseconds (0 when empty).
