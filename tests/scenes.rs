@@ -209,12 +209,14 @@ fn print_fidelity(reports: &[SceneReport]) {
 ///   asserted;
 /// - the largest one-step rise of the mechanical energy is at most
 ///   rapier's plus 1 % of the run's largest kinetic energy;
-/// - on settling scenes each body rests on what rapier's rests on: its final
-///   height within 5 mm of rapier's (bodies rapier lost through something
-///   left out). Where it slides or rolls sideways to, and how it turns on
-///   the way, is chaotic after a landing step that differs (rapier's sweep
-///   stops ~5 mm above the contact, ours at it), so the distance and the
-///   angle are printed, not asserted.
+/// - on settling scenes each body comes to rest where rapier's does: its
+///   final centre of mass within 5 mm of rapier's and its up axis within
+///   0.01 rad (bodies rapier lost through something left out), wherever
+///   rapier's own outcome is reproducible: rapier run again with every
+///   body raised 0.1 mm ends within 5 mm of its first run. Where it does
+///   not (a slide at dt = 0.25 s catching on mesh edges, rapier#217), the
+///   reference says nothing finer than that and only the final height is
+///   asserted (within 5 mm); the distances are printed.
 #[test]
 fn affine_is_faithful_on_every_scene() {
     let mut reports: Vec<SceneReport> = Vec::new();
@@ -232,6 +234,16 @@ fn affine_is_faithful_on_every_scene() {
         let theirs = run_scene(&scene, Backend::Rapier, &options).expect("rapier runs");
         let mut ours = run_scene(&scene, Backend::Affine, &options).expect("affine runs");
         ours.compare_rest(&theirs);
+        // How far rapier's own outcome moves when the start does by 0.1 mm.
+        let spread = scene.effects.settles.then(|| {
+            let lifted = RunOptions {
+                lift: 1.0e-4,
+                ..options
+            };
+            let mut again = run_scene(&scene, Backend::Rapier, &lifted).expect("rapier runs");
+            again.compare_rest(&theirs);
+            again.rest.expect("a settling scene gets a rest gap")
+        });
         if ours.frozen > 0 {
             failures.push(format!(
                 "{}: affine held {} body-steps (rapier {})",
@@ -252,14 +264,39 @@ fn affine_is_faithful_on_every_scene() {
                 scene.name
             ));
         }
-        if let Some(gap) = ours.rest
-            && gap.height > 5.0e-3
-        {
-            failures.push(format!(
-                "{}: a body rests {:.1} mm higher or lower than rapier's",
+        if let (Some(gap), Some(spread)) = (ours.rest, spread) {
+            let reproducible = spread.distance <= 5.0e-3;
+            println!(
+                "{}: rest {:.1} mm / {:.4} rad (up axis {:.4} rad, height {:.1} mm) from rapier's; \
+                 rapier raised 0.1 mm: {:.1} mm / {:.4} rad{}",
                 scene.name,
-                gap.height * 1e3
-            ));
+                gap.distance * 1e3,
+                gap.angle,
+                gap.tilt,
+                gap.height * 1e3,
+                spread.distance * 1e3,
+                spread.angle,
+                if reproducible {
+                    ""
+                } else {
+                    " (not reproducible)"
+                }
+            );
+            if gap.height > 5.0e-3 {
+                failures.push(format!(
+                    "{}: a body rests {:.1} mm higher or lower than rapier's",
+                    scene.name,
+                    gap.height * 1e3
+                ));
+            }
+            if reproducible && (gap.distance > 5.0e-3 || gap.tilt > 0.01) {
+                failures.push(format!(
+                    "{}: a body rests {:.1} mm from rapier's, its up axis {:.4} rad apart",
+                    scene.name,
+                    gap.distance * 1e3,
+                    gap.tilt
+                ));
+            }
         }
         reports.push(theirs);
         reports.push(ours);

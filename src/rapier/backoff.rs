@@ -1,21 +1,166 @@
-//! Where a clamp puts a body: a hit is decided by the *true* contact (the
+//! Where a clamp puts a body. A hit is decided by the *true* contact (the
 //! query at zero skin), so a shape whose motion never touches anything is
-//! never clamped; the clamp then stands a little before the contact, far
-//! enough for `f32` poses and close enough that the next step's contact
-//! normal is the true one (a skin earlier, on a grazing path, it is steeply
-//! inclined and the next step's contact takes the approach speed away).
+//! never clamped. Where the clamp then stands follows rapier's own CCD,
+//! whose rest poses are the reference: parry's sweep stops a pair when its
+//! *cores* (the shapes without their rounding: a ball's centre, a capsule's
+//! segment, a round cuboid's box) are `max(slop, r1 + r2 - slop)` apart,
+//! `slop` being rapier's allowed linear error (5 mm by default) and `r` the
+//! roundings. So a pair of unrounded shapes (boxes, triangles, hulls) stops
+//! `slop` apart, before its true contact ([`stop_before_gap`]), and a pair
+//! with a ball or a capsule in it stops `slop` deep, after its true contact,
+//! and only if it gets that deep at all ([`stop_when_deep`]). Landing a body
+//! a few millimetres elsewhere than rapier does is enough to send it
+//! tumbling elsewhere.
 
+use super::report::CcdReport;
+use super::touching::{MAX_TOUCH_SAMPLES, gap_at};
+use crate::enclosure::TimeSpan;
+use crate::error::CcdError;
 use crate::motion::Motion;
-use crate::query::Toi;
+use crate::query::{QueryOptions, ShapeMotion, Toi, time_of_impact};
 use crate::solve::RootStatus;
-use rapier3d::parry::shape::Shape;
+use rapier3d::parry::shape::{Shape, SharedShape, TypedShape};
 
-/// Share of the skin a clamp backs off from the true contact: the clamped
-/// pair ends between 0 and about `BACKOFF·skin` (plus the query's ε of
-/// travel) apart, well inside the band that counts as touching at the next
-/// step's start, so the next step hands the pair to rapier's contacts
-/// rather than clamping it again at once.
+/// Share of the skin a clamp at the true contact backs off (when rapier's
+/// rule does not say otherwise: a budget ran out, a pair touching at the
+/// start): the clamped pair ends between 0 and about `BACKOFF·skin` (plus
+/// the query's ε of travel) apart, well inside the band that counts as
+/// touching at the next step's start, so the next step hands the pair to
+/// rapier's contacts rather than clamping it again at once.
 pub(crate) const BACKOFF: f64 = 0.1;
+
+/// Share of the slop within which parry's sweep counts a pair as at its
+/// stop (`tolerance = 0.25·linear_slop` in parry's `sweep_time_of_impact`).
+const TOLERANCE: f64 = 0.25;
+
+/// What the stage needs of rapier's own rules to hand a hit back.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct HandBack {
+    /// Metres a pair may sink within a step before the stage steps in
+    /// (`CcdConfig::sink`).
+    pub sink: f64,
+    /// Rapier's allowed linear error, metres
+    /// (`IntegrationParameters::allowed_linear_error`).
+    pub slop: f64,
+}
+
+impl HandBack {
+    /// The gap of the full shapes at which rapier's CCD stops the pair:
+    /// `slop` for unrounded pairs, `-slop` (a depth) for a pair whose
+    /// roundings add up to `2·slop` or more. 0 (the contact) where rapier's
+    /// CCD has no such rule: a target that moves (rapier sweeps only fixed
+    /// targets, bar bullets) or a pair parry's sweep does not take
+    /// (cylinders, cones, half-spaces, compounds: rapier casts them to the
+    /// contact).
+    pub fn stop_gap(&self, moving: &ShapeMotion, target: &ShapeMotion) -> f64 {
+        if !target.motion.is_fixed() {
+            return 0.0;
+        }
+        let composite = matches!(
+            target.shape.as_typed_shape(),
+            TypedShape::TriMesh(_) | TypedShape::HeightField(_)
+        );
+        let r2 = if composite {
+            Some(0.0)
+        } else {
+            swept_rounding(target.shape)
+        };
+        match (swept_rounding(moving.shape), r2) {
+            (Some(r1), Some(r2)) => {
+                let r = r1 + r2;
+                self.slop.max(r - self.slop) - r
+            }
+            _ => 0.0,
+        }
+    }
+
+    /// How deep a pair touching at the start (its gap then `gap0`) may go
+    /// before the stage steps in: its start depth, the sink, or, for a
+    /// rounded pair, rapier's stop depth plus parry's tolerance, whichever
+    /// is deepest (a ball or capsule stopped `slop` deep that slides on
+    /// wobbles around that depth from sample to sample: held at its start
+    /// for that, it would lose its velocity).
+    pub fn allowed_depth(&self, gap0: f64, moving: &ShapeMotion, target: &ShapeMotion) -> f64 {
+        let stop = self.stop_gap(moving, target);
+        let rounded = if stop < 0.0 {
+            TOLERANCE * self.slop - stop
+        } else {
+            0.0
+        };
+        (-gap0).max(self.sink).max(rounded)
+    }
+
+    /// For a rounded pair shallower at the start (its gap then `gap0`)
+    /// than parry's tolerance short of rapier's stop depth: that depth,
+    /// where rapier's sweep would stop it ([`stop_when_deep`]). `None` for
+    /// unrounded pairs and for pairs already about that deep (rapier's
+    /// sweep ignores those, leaving them to the contacts).
+    pub fn deep_stop(&self, gap0: f64, moving: &ShapeMotion, target: &ShapeMotion) -> Option<f64> {
+        let stop = self.stop_gap(moving, target);
+        (stop < 0.0 && gap0 > stop + TOLERANCE * self.slop).then_some(-stop)
+    }
+
+    /// A pair apart by no more than this at the start of a step belongs to
+    /// rapier's contacts (see `touching`): within the skin, or, when
+    /// `touching_pair`'s samples are fine enough that the moving shape
+    /// cannot pass through anything between two (`travel`, the pair's
+    /// relative travel over the step, is small), within parry's tolerance
+    /// of rapier's stop. parry's sweep answers such a pair with a hit at
+    /// time 0, which rapier's CCD ignores; clamping it at its contact
+    /// instead would hold a body resting a millimetre or two above the
+    /// ground where it is, step after step.
+    pub fn touch_band(
+        &self,
+        moving: &ShapeMotion,
+        target: &ShapeMotion,
+        skin: f64,
+        travel: f64,
+    ) -> f64 {
+        if !self.is_slow(moving.shape, travel) {
+            return skin;
+        }
+        skin.max(self.stop_gap(moving, target) + TOLERANCE * self.slop)
+    }
+
+    /// Whether a pair whose points move at most `travel` relative to each
+    /// other is slow: `touching_pair`'s samples would be fine enough.
+    pub fn is_slow(&self, moving: &dyn Shape, travel: f64) -> bool {
+        travel <= MAX_TOUCH_SAMPLES as f64 * self.sample_travel(moving)
+    }
+
+    /// The most a point of `moving` may travel between two of
+    /// `touching_pair`'s samples: the sink, and half the shape's
+    /// thickness (so it cannot pass through a surface unseen).
+    pub fn sample_travel(&self, moving: &dyn Shape) -> f64 {
+        self.sink.min(0.5 * moving.ccd_thickness() as f64)
+    }
+}
+
+/// The rounding of a shape parry's sweep takes (the radius of a ball or
+/// capsule, the border of a round box, triangle or hull; 0 for a box,
+/// segment, triangle or hull); `None` for the shapes it does not take.
+fn swept_rounding(shape: &dyn Shape) -> Option<f64> {
+    use TypedShape as T;
+    match shape.as_typed_shape() {
+        T::Cuboid(_) | T::Segment(_) | T::Triangle(_) | T::ConvexPolyhedron(_) => Some(0.0),
+        _ => core(shape).map(|(_, r)| r),
+    }
+}
+
+/// A rounded shape parry's sweep takes: its core and rounding; `None`
+/// for any other shape.
+fn core(shape: &dyn Shape) -> Option<(SharedShape, f64)> {
+    use TypedShape as T;
+    let (core, r) = match shape.as_typed_shape() {
+        T::Ball(b) => (SharedShape::ball(0.0), b.radius),
+        T::Capsule(c) => (SharedShape::segment(c.segment.a, c.segment.b), c.radius),
+        T::RoundCuboid(r) => (SharedShape::new(r.inner_shape), r.border_radius),
+        T::RoundTriangle(r) => (SharedShape::new(r.inner_shape), r.border_radius),
+        T::RoundConvexPolyhedron(r) => (SharedShape::new(r.inner_shape.clone()), r.border_radius),
+        _ => return None,
+    };
+    (r >= 0.0 && r.is_finite()).then_some((core, r as f64))
+}
 
 /// Bound on how far the pair's points move relative to each other over the
 /// whole step, metres.
@@ -32,14 +177,96 @@ pub(crate) fn pair_travel(s1: &dyn Shape, m1: &Motion, s2: &dyn Shape, m2: &Moti
 /// The shapes are apart at every time before a true-contact hit, so the
 /// pose there is sound; it is at most `back` (plus the query's ε) from the
 /// contact.
-pub(crate) fn back_off(mut toi: Toi, travel: f64, back: f64, from: f64) -> Toi {
+pub(crate) fn back_off(toi: Toi, travel: f64, back: f64, from: f64) -> Toi {
     if toi.status == RootStatus::InitiallyTouching || travel <= 0.0 || !travel.is_finite() {
         return toi;
     }
-    let tau = (toi.fraction - back / travel).max(from).min(toi.fraction);
+    at_fraction(toi, (toi.fraction - back / travel).max(from))
+}
+
+/// The same hit reported at `tau`, no later than it was.
+fn at_fraction(mut toi: Toi, tau: f64) -> Toi {
+    let tau = tau.min(toi.fraction);
     if toi.fraction > 0.0 {
         toi.time *= tau / toi.fraction;
     }
     toi.fraction = tau;
     toi
+}
+
+/// Bisection steps [`stop_before_gap`] takes at most (2⁻²⁴ of the step is
+/// far below the slop at any speed rapier allows).
+const BISECTIONS: usize = 24;
+
+/// An unrounded pair's stop: the latest time before its true contact
+/// (`toi`, a hit at zero skin) at which parry's gap is still above `gap`,
+/// found by bisection to within parry's tolerance. The pair is apart at
+/// every time before the contact, so any such time is sound; `None` when
+/// the pair is within the tolerance of `gap` already at `from` (parry's
+/// sweep answers such a pair with a hit at time 0, which rapier's CCD
+/// ignores).
+pub(crate) fn stop_before_gap(
+    moving: &ShapeMotion,
+    target: &ShapeMotion,
+    toi: Toi,
+    from: f64,
+    gap: f64,
+    slop: f64,
+) -> Option<Toi> {
+    let (s1, m1, s2, m2) = (moving.shape, &moving.motion, target.shape, &target.motion);
+    let reach = gap + slop + 1.0e-3;
+    // parry cannot tell: as if touching (earlier is always sound).
+    let gap_of = |tau: f64| gap_at(s1, m1, s2, m2, tau, reach).map_or(f64::NEG_INFINITY, |g| g.0);
+    let near = gap + TOLERANCE * slop;
+    if gap_of(from) <= near {
+        return None;
+    }
+    let (mut apart, mut close) = (from, toi.fraction);
+    for _ in 0..BISECTIONS {
+        let mid = 0.5 * (apart + close);
+        let g = gap_of(mid);
+        if g > gap {
+            apart = mid;
+            if g <= gap + 1.0e-6 {
+                break;
+            }
+        } else {
+            close = mid;
+        }
+    }
+    Some(at_fraction(toi, apart))
+}
+
+/// A rounded pair's stop: the first time after its true contact `contact`
+/// and before `until` at which it is `depth` deep (its cores `r1 + r2 -
+/// depth` apart), from the sound query on the cores; `None` when it never
+/// gets that deep (rapier's contacts own the pair then, as with rapier's
+/// CCD). Also `None` for a pair with no rounding (the caller's error).
+pub(crate) fn stop_when_deep(
+    moving: &ShapeMotion,
+    target: &ShapeMotion,
+    contact: f64,
+    until: f64,
+    depth: f64,
+    opts: &QueryOptions,
+    report: &mut CcdReport,
+) -> Result<Option<Toi>, CcdError> {
+    let side = |s: &dyn Shape| core(s).map_or((None, 0.0), |(c, r)| (Some(c), r));
+    let ((c1, r1), (c2, r2)) = (side(moving.shape), side(target.shape));
+    let skin = r1 + r2 - depth;
+    if c1.is_none() && c2.is_none() || skin <= 0.0 || until <= contact {
+        return Ok(None);
+    }
+    let core1: &dyn Shape = c1.as_ref().map_or(moving.shape, |c| c.as_ref());
+    let core2: &dyn Shape = c2.as_ref().map_or(target.shape, |c| c.as_ref());
+    let deep = QueryOptions {
+        skin,
+        time_range: TimeSpan::new(contact, until),
+        ..*opts
+    };
+    let found = time_of_impact(core1, &moving.motion, core2, &target.motion, &deep)?;
+    if let Some(toi) = &found {
+        report.evaluations += toi.stats.pair_evaluations;
+    }
+    Ok(found.filter(|t| t.status != RootStatus::InitiallyTouching))
 }

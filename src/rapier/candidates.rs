@@ -12,7 +12,7 @@ use crate::convert::pose_from_iso;
 use crate::motion::{Motion, Trajectory};
 use rapier3d::parry::bounding_volume::{Aabb, BoundingVolume};
 use rapier3d::parry::query::QueryDispatcher;
-use rapier3d::parry::shape::Shape;
+use rapier3d::parry::shape::{Shape, Triangle, TypedShape};
 use rapier3d::prelude::{
     ActiveEvents, ActiveHooks, BroadPhaseBvh, Collider, ColliderHandle, PairFilterContext,
     QueryFilter, RigidBodyType, SolverFlags, Vector,
@@ -179,4 +179,83 @@ pub(crate) fn body_box(scene: &StageWorld, m: &Moved) -> Option<Aabb> {
         .filter(|co| co.is_enabled())
         .map(|co| co.compute_aabb().loosened(margin))
         .reduce(|a, b| a.merged(&b))
+}
+
+/// Most triangles of one mesh a slow collider is swept against one by one
+/// ([`mesh_triangles`]); past it the mesh stays whole.
+const MAX_PIECES: usize = 64;
+
+/// One triangle of a mesh target, swept on its own.
+pub(crate) struct MeshPiece {
+    pub triangle: Triangle,
+    /// Rapier's CCD leaves this triangle to the contacts: a heightfield
+    /// (one-sided in rapier) the moving shape's centre approaches by less
+    /// than rapier's fallback radius and ends in front of by more (parry's
+    /// `one_sided_early_out`).
+    pub contacts_only: bool,
+}
+
+/// The triangles of a fixed triangle mesh or heightfield that `moving` may
+/// meet (those whose boxes meet its swept box, in the mesh's frame), for
+/// sweeping each on its own as rapier's CCD does: it stops a body at each
+/// triangle of a mesh apart, and leaves to the contacts only the
+/// triangles touching at the start, not the whole mesh. `false` (and
+/// nothing pushed) for other shapes, moving meshes, or [`MAX_PIECES`]
+/// triangles or more. `slop`: rapier's allowed linear error.
+pub(crate) fn mesh_triangles(
+    moving: &dyn Shape,
+    moving_motion: &Motion,
+    target: &dyn Shape,
+    target_motion: &Motion,
+    margin: f64,
+    slop: f64,
+    out: &mut Vec<MeshPiece>,
+) -> bool {
+    if !target_motion.is_fixed() {
+        return false;
+    }
+    let pose = pose_from_iso(&target_motion.pose_at(0.0));
+    let local = swept_aabb(moving, moving_motion)
+        .loosened(margin as f32)
+        .transform_by(&pose.inverse());
+    let start = out.len();
+    match target.as_typed_shape() {
+        TypedShape::TriMesh(mesh) => {
+            for i in mesh.bvh().intersect_aabb(&local) {
+                if out.len() - start == MAX_PIECES {
+                    break;
+                }
+                out.push(MeshPiece {
+                    triangle: mesh.triangle(i),
+                    contacts_only: false,
+                });
+            }
+        }
+        TypedShape::HeightField(field) => {
+            // The moving shape's centre at both ends, in the field's frame.
+            let centre = moving.mass_properties(1.0).local_com;
+            let at = |tau: f64| {
+                let p = pose_from_iso(&moving_motion.pose_at(tau)) * centre;
+                pose.inverse_transform_point(p)
+            };
+            let (c1, c2) = (at(0.0), at(1.0));
+            let fallback = (0.5 * moving.ccd_thickness()).max(slop as f32);
+            field.map_elements_in_local_aabb(&local, &mut |_, t| {
+                if out.len() - start < MAX_PIECES {
+                    let n = (t.b - t.a).cross(t.c - t.a).normalize_or_zero();
+                    let (o1, o2) = (n.dot(c1 - t.a), n.dot(c2 - t.a));
+                    out.push(MeshPiece {
+                        triangle: *t,
+                        contacts_only: o1 >= 0.0 && o1 - o2 < fallback && o2 > fallback,
+                    });
+                }
+            });
+        }
+        _ => return false,
+    }
+    if out.len() - start >= MAX_PIECES {
+        out.truncate(start);
+        return false;
+    }
+    true
 }

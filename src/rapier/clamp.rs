@@ -1,9 +1,8 @@
 //! Applying an impact: the body goes back to its pose at the reported time.
 //!
-//! The time already includes the skin (the query reports when the gap
-//! reaches it), so the clamped body is a skin away from what it would hit.
-//! Velocities are kept: the next step's speculative contacts stop the body,
-//! as with rapier's own CCD.
+//! The time is already where the body should stand (`backoff` chose it
+//! from the true contact). Velocities are kept: the next step's
+//! speculative contacts stop the body, as with rapier's own CCD.
 
 use super::moved::Moved;
 use crate::convert::{iso_from_pose, point_from_glam, pose_from_iso, vec_from_glam};

@@ -39,27 +39,37 @@ impl Default for SweepTargets {
 }
 
 /// Settings of [`AffineCcd`](super::AffineCcd).
+///
+/// Where a clamped body stands is not a setting: it is where rapier's own
+/// CCD stops it, read from the world's `IntegrationParameters`
+/// (`allowed_linear_error`, 5 mm by default): a pair of unrounded shapes
+/// (boxes, triangles, hulls) that far before its true contact, a pair with
+/// a ball or capsule in it that deep after it.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
 pub struct CcdConfig {
-    /// Accuracy of each time of impact, a fraction of the step: a clamp
-    /// lands at most this much before the true contact.
+    /// Accuracy of each time of impact, a fraction of the step: a reported
+    /// contact is at most this much before the true one.
     pub epsilon: f64,
     /// Metres: the band within which a pair counts as touching at the start
-    /// of a step (rapier's contacts own it then), and ten times the distance
-    /// a clamp backs off from the true contact along the motion. A hit is
-    /// always the true contact (zero distance): a shape that passes within
-    /// the skin of something without touching it is not clamped. Used as
-    /// `min(skin, ½·prediction distance)`; rapier's prediction distance is
-    /// 2 cm by default.
+    /// of a step (rapier's contacts own it then; a slow pair also within
+    /// rapier's tolerance of its stop), and ten times the distance a clamp
+    /// backs off from the true contact where rapier's CCD stops at the
+    /// contact itself (moving targets, cylinders, cones, half-spaces) or a
+    /// search ran out of budget. A hit is always the true contact (zero
+    /// distance): a shape that passes within the skin of something without
+    /// touching it is not clamped. Used as `min(skin, ½·prediction
+    /// distance)`; rapier's prediction distance is 2 cm by default.
     pub skin: f64,
     /// Metres a contact may go deep within a step before the stage steps
     /// in. A fast body touching something at the start may sink this far
-    /// beyond its start depth (rapier's contacts own such pairs; this only
+    /// (or beyond its start depth, or a ball or capsule a little beyond
+    /// rapier's stop depth; rapier's contacts own such pairs, this only
     /// keeps the solver from pushing a fast body deep, such as a spinning
-    /// edge into a wall), and a contact made so late in the step that the
-    /// pair cannot move this far after it is left to rapier's contacts as
-    /// well (a slow landing is not clamped).
+    /// edge into a wall), and a contact rapier casts to the contact itself
+    /// made so late in the step that the pair cannot move this far after
+    /// it is left to rapier's contacts as well (a slow landing is not
+    /// clamped).
     pub sink: f64,
     #[serde(with = "ArithmeticDef")]
     pub arithmetic: Arithmetic,

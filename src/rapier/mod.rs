@@ -16,16 +16,17 @@
 //! commit, and its CCD asks the query dispatcher only for a few pairs, so
 //! the stage wraps the step: record the poses, let rapier step (its CCD
 //! off), then sweep the bodies that moved fast enough to tunnel from their
-//! old to their new pose and put each back to its pose just before its
-//! first true contact (velocities kept; see `backoff`): a body that passes
-//! close to something without touching it is left alone. A step without
-//! fast bodies touches nothing. After a clamp, what it changed is swept
-//! again against the cut motions (see `rounds`). A pair already within the
-//! skin at the start is rapier's contacts' unless it goes deeper than
-//! `CcdConfig::sink` (sampled, see `touching`); a body such a pair holds
-//! where it started stops, so no velocity piles up in a body held still. Fast kinematic bodies (rapier
-//! never sweeps them) push the dynamic bodies they would pass, in time
-//! order: each is carried from its time of impact, ends a skin ahead of its
+//! old to their new pose and put each back where rapier's own CCD would
+//! have stopped it, found from its first true contact (velocities kept;
+//! see `backoff`): a body that passes close to something without touching
+//! it is left alone. A step without fast bodies touches nothing. After a
+//! clamp, what it changed is swept again against the cut motions (see
+//! `rounds`). A pair already touching at the start is rapier's contacts'
+//! unless it goes deeper than allowed (sampled, see `touching`); a body
+//! such a pair holds where it started stops, so no velocity piles up in a
+//! body held still. Fast kinematic bodies (rapier never sweeps them) push
+//! the dynamic bodies they would pass, in time order: each is carried
+//! from its time of impact, ends a skin ahead of its
 //! pusher with the pusher's velocity, and pushes in turn what it meets (see
 //! `push`). With `CcdConfig::substeps` > 1 the step is first cut at the
 //! earliest impact predicted from velocities, forces and gravity, and each
@@ -33,7 +34,7 @@
 
 // The phases of one step, in the order the data passes through them.
 mod apply; // the plan written back to the world
-mod backoff; // where a clamp stands: a little before the true contact
+mod backoff; // where a clamp stands: where rapier's CCD would stop the body
 mod candidates; // what a fast collider may meet (broad phase, pair rules)
 mod clamp; // cut and carried motions
 mod moved; // a moved body's two poses and travel bounds
@@ -294,6 +295,9 @@ impl AffineCcd {
             joints,
             hooks,
             config: &self.config,
+            // A piece ends at the predicted contact itself: its solve
+            // bounces there (rapier's stops are for clamps).
+            slop: 0.0,
         };
         substep::predict(&scene, gravity, &self.aims, horizon, &mut self.moved);
         substep::first_impact(
@@ -375,6 +379,7 @@ impl AffineCcd {
                     joints: impulse_joints,
                     hooks,
                     config: &self.config,
+                    slop: params.allowed_linear_error() as f64,
                 };
                 let plan = rounds::sweep_rounds(
                     &scene,

@@ -2,8 +2,10 @@
 //! crosses before it. Every call to the time-of-impact query is in
 //! [`earliest`] and [`first_crossing`].
 
-use super::backoff::{BACKOFF, back_off, pair_travel};
-use super::candidates::{Candidate, Interaction, gather, interaction, swept_aabb};
+use super::backoff::{BACKOFF, HandBack, back_off, pair_travel, stop_before_gap, stop_when_deep};
+use super::candidates::{
+    Candidate, Interaction, MeshPiece, gather, interaction, mesh_triangles, swept_aabb,
+};
 use super::moved::Moved;
 use super::report::CcdReport;
 use super::touching::{gap_at, touching_pair};
@@ -85,25 +87,86 @@ struct Earliest {
 
 /// Earliest impact of `moving` against `targets`, all pairs in one search.
 ///
-/// A pair within the skin at the start (parry's gap) belongs to rapier's
-/// contacts, whose speculative contacts see it: it is left out of the
-/// joint search and handed to [`touching_pair`], which steps in only when
-/// the motion drives it deeper than `max(start depth, sink)` or it
+/// A fixed mesh or heightfield near a slow shape is split into its nearby
+/// triangles first, each a target of its own, as rapier's CCD sweeps them.
+///
+/// A pair close at the start (within [`HandBack::touch_band`] by parry's
+/// gap: the skin, or about rapier's stop for a slow pair) belongs to
+/// rapier's contacts, whose speculative contacts see it: it is left out of
+/// the joint search and handed to [`touching_pair`], which steps in only
+/// when the motion drives it deeper than [`HandBack::allowed_depth`] or it
 /// separates and comes back (rapier's `stop_at_penetration = false`). An
 /// impact at τ = 0 for every touching pair would freeze a body resting or
-/// sliding on the ground.
+/// sliding on the ground. A ball or capsule close but shallower than
+/// rapier's stop gets that stop instead (`stop_when_deep`).
 ///
 /// The others are searched together at **zero skin**: an impact is the
-/// true contact, backed off along the motion (see `backoff`). A near miss
-/// (a ball passing an edge within the skin) is no impact, and neither is a
-/// contact that cannot get deeper than `sink` before the step ends (the
-/// pair's travel after it is smaller): rapier's contacts resolve it next
-/// step exactly as they would without CCD.
+/// true contact, so a near miss (a ball passing an edge within the skin)
+/// is no impact. The body then stops where rapier's own CCD would stop it
+/// (see `backoff`): an unrounded pair `slop` before the contact, a rounded
+/// one `slop` deep after it, if it gets that deep before the step ends (or
+/// before another pair's stop); pairs rapier casts to the contact, at the
+/// contact, unless they cannot get deeper than `sink` before the step ends
+/// (the pair's travel after it is smaller): rapier's contacts resolve
+/// those next step exactly as they would without CCD.
 fn earliest(
     moving: &ShapeMotion,
     targets: &[ShapeMotion],
     opts: &QueryOptions,
-    sink: f64,
+    rules: &HandBack,
+    report: &mut CcdReport,
+) -> Result<Option<Earliest>, CcdError> {
+    // Fixed meshes near a slow shape: one target per triangle (see
+    // `mesh_triangles`), each known by the target it came from.
+    let margin = 2.0 * rules.slop + opts.skin;
+    let mut triangles: Vec<MeshPiece> = Vec::new();
+    let mut origin: Vec<usize> = Vec::with_capacity(targets.len());
+    let mut split: Vec<usize> = Vec::new();
+    for (j, t) in targets.iter().enumerate() {
+        let travel = pair_travel(moving.shape, &moving.motion, t.shape, &t.motion);
+        let before = triangles.len();
+        if rules.is_slow(moving.shape, travel)
+            && mesh_triangles(
+                moving.shape,
+                &moving.motion,
+                t.shape,
+                &t.motion,
+                margin,
+                rules.slop,
+                &mut triangles,
+            )
+        {
+            split.extend(std::iter::repeat_n(j, triangles.len() - before));
+        } else {
+            origin.push(j);
+        }
+    }
+    let mut pieces: Vec<ShapeMotion> = origin.iter().map(|&j| targets[j]).collect();
+    let mut contacts_only = vec![false; pieces.len()];
+    for (piece, &j) in triangles.iter().zip(&split) {
+        pieces.push(ShapeMotion {
+            shape: &piece.triangle,
+            motion: targets[j].motion,
+        });
+        contacts_only.push(piece.contacts_only);
+    }
+    origin.extend(split);
+    let found = earliest_piece(moving, &pieces, &contacts_only, opts, rules, report)?;
+    Ok(found.map(|e| Earliest {
+        target: origin[e.target],
+        ..e
+    }))
+}
+
+/// [`earliest`] over targets none of which is split further;
+/// `contacts_only` marks those rapier's CCD leaves to its contacts (only
+/// `touching_pair`'s check that they do not sink deep applies).
+fn earliest_piece(
+    moving: &ShapeMotion,
+    targets: &[ShapeMotion],
+    contacts_only: &[bool],
+    opts: &QueryOptions,
+    rules: &HandBack,
     report: &mut CcdReport,
 ) -> Result<Option<Earliest>, CcdError> {
     let mut best: Option<Earliest> = None;
@@ -115,40 +178,84 @@ fn earliest(
             best = Some(found);
         }
     };
+    let sink = rules.sink;
     let lo = opts.time_range.lo;
-    // A small prediction finds the contact of a pair within the skin, or
+    let bands: Vec<f64> = targets
+        .iter()
+        .map(|t| {
+            let travel = pair_travel(moving.shape, &moving.motion, t.shape, &t.motion);
+            rules.touch_band(moving, t, opts.skin, travel)
+        })
+        .collect();
+    let widest = bands.iter().copied().fold(opts.skin, f64::max);
+    // A small prediction finds the contact of a pair within its band, or
     // within the allowed sinking (which `touching_pair` reads it for).
-    let reach = opts.skin.max(sink) + 1.0e-2;
-    let touching = |j: usize, start: (f64, Option<Contact>), report: &mut CcdReport| {
+    let reach = widest.max(sink) + 1.0e-2;
+    // A pair close at the start: a ball or capsule shallower than
+    // rapier's stop gets that stop from the sound query on its cores (as
+    // rapier's sweep gives it, rather than leaving it to the contacts);
+    // any other is rapier's contacts' (`touching_pair`).
+    let close = |j: usize, start: (f64, Option<Contact>), report: &mut CcdReport| {
+        let t = &targets[j];
+        if let Some(depth) = rules.deep_stop(start.0, moving, t) {
+            let toi = stop_when_deep(moving, t, lo, opts.time_range.hi, depth, opts, report)?;
+            return Ok::<_, CcdError>(toi.map(|toi| Earliest {
+                toi,
+                target: j,
+                touching: false,
+            }));
+        }
         report.pairs_touching_at_start += 1;
-        touching_pair(moving, &targets[j], start, sink, opts, report)
+        let toi = touching_pair(moving, t, start, bands[j], rules, opts, report)?;
+        Ok(toi.map(|toi| Earliest {
+            toi,
+            target: j,
+            touching: true,
+        }))
     };
     let mut alive: Vec<usize> = Vec::with_capacity(targets.len());
     // parry's contact costs GJK (and EPA when touching): ask it only for
-    // pairs whose boxes at the start come within the skin.
+    // pairs whose boxes at the start come within the band.
     let start_box = |s: &dyn Shape, m: &Motion| s.compute_aabb(&pose_from_iso(&m.pose_at(lo)));
     let moving_box =
-        start_box(moving.shape, &moving.motion).loosened(opts.skin as f32 * 1.01 + 1.0e-6);
+        start_box(moving.shape, &moving.motion).loosened(widest as f32 * 1.01 + 1.0e-6);
     for (j, t) in targets.iter().enumerate() {
+        if contacts_only[j] {
+            let start = gap_at(moving.shape, &moving.motion, t.shape, &t.motion, lo, reach)
+                .unwrap_or((reach, None));
+            report.pairs_touching_at_start += 1;
+            if let Some(toi) = touching_pair(moving, t, start, f64::INFINITY, rules, opts, report)?
+            {
+                keep(Earliest {
+                    toi,
+                    target: j,
+                    touching: true,
+                });
+            }
+            continue;
+        }
         if !moving_box.intersects(&start_box(t.shape, &t.motion)) {
             alive.push(j);
             continue;
         }
         match gap_at(moving.shape, &moving.motion, t.shape, &t.motion, lo, reach) {
-            Some(start) if start.0 <= opts.skin => {
-                if let Some(toi) = touching(j, start, report)? {
-                    keep(Earliest {
-                        toi,
-                        target: j,
-                        touching: true,
-                    });
+            Some(start) if start.0 <= bands[j] => {
+                if let Some(found) = close(j, start, report)? {
+                    keep(found);
                 }
             }
             _ => alive.push(j),
         }
     }
-    let contact = QueryOptions { skin: 0.0, ..*opts };
-    while !alive.is_empty() {
+    // The search ends at the earliest stop found so far: a rounded pair
+    // stops after its contact, and another pair may stop before that.
+    let mut until = opts.time_range.hi;
+    while !alive.is_empty() && until > lo {
+        let contact = QueryOptions {
+            skin: 0.0,
+            time_range: TimeSpan::new(lo, until),
+            ..*opts
+        };
         let set: Vec<ShapeMotion> = alive
             .iter()
             .map(|&j| ShapeMotion {
@@ -161,36 +268,67 @@ fn earliest(
         report.evaluations += many.toi.stats.pair_evaluations;
         let j = alive[many.target];
         let t = &targets[j];
-        if many.toi.status != RootStatus::InitiallyTouching {
-            let travel = pair_travel(moving.shape, &moving.motion, t.shape, &t.motion);
-            // No point of the pair moves farther than this after the
-            // contact, so it gets no deeper: rapier's contacts take it
-            // next step as they would without CCD (a slow landing).
-            let after = travel * (opts.time_range.hi - many.toi.fraction).max(0.0);
-            if after <= sink && many.toi.status == RootStatus::Hit {
-                report.shallow_contacts += 1;
-                alive.remove(many.target);
+        if many.toi.status == RootStatus::InitiallyTouching {
+            // The pair touches at the start after all (parry saw it apart).
+            alive.remove(many.target);
+            let Some(start) = gap_at(moving.shape, &moving.motion, t.shape, &t.motion, lo, reach)
+            else {
                 continue;
+            };
+            if let Some(found) = close(j, start, report)? {
+                keep(found);
             }
+            continue;
+        }
+        let travel = pair_travel(moving.shape, &moving.motion, t.shape, &t.motion);
+        let stop_gap = rules.stop_gap(moving, t);
+        // No point of the pair moves farther than this after the
+        // contact, so it gets no deeper: rapier's contacts take it
+        // next step as they would without CCD (a slow landing).
+        let after = travel * (opts.time_range.hi - many.toi.fraction).max(0.0);
+        if after <= sink && many.toi.status == RootStatus::Hit && stop_gap <= 0.0 {
+            report.shallow_contacts += 1;
+            alive.remove(many.target);
+            continue;
+        }
+        let backed = back_off(many.toi, travel, BACKOFF * opts.skin, lo);
+        if many.toi.status != RootStatus::Hit || stop_gap == 0.0 {
+            // A budget ran out (the time is only a bound), or rapier stops
+            // the pair at its contact: stop there.
             keep(Earliest {
-                toi: back_off(many.toi, travel, BACKOFF * opts.skin, lo),
+                toi: backed,
                 target: j,
                 touching: false,
             });
             break;
         }
-        // The pair touches at the start after all (parry saw it apart).
-        alive.remove(many.target);
-        let Some(start) = gap_at(moving.shape, &moving.motion, t.shape, &t.motion, lo, reach)
-        else {
-            continue;
-        };
-        if let Some(toi) = touching(j, start, report)? {
+        if stop_gap > 0.0 {
+            // Unrounded: `slop` before the contact, the earliest of all
+            // (at the contact when the pair starts about that close:
+            // rapier's CCD would leave it to the contacts; a clamp there
+            // is the sound stand-in).
+            let toi = stop_before_gap(moving, t, many.toi, lo, stop_gap, rules.slop);
             keep(Earliest {
-                toi,
+                toi: toi.unwrap_or(backed),
                 target: j,
-                touching: true,
+                touching: false,
             });
+            break;
+        }
+        // Rounded: `slop` deep after the contact, if it gets there before
+        // `until`; other pairs may still meet before that.
+        alive.remove(many.target);
+        let deep = stop_when_deep(moving, t, many.toi.fraction, until, -stop_gap, opts, report)?;
+        match deep {
+            Some(toi) => {
+                until = toi.fraction;
+                keep(Earliest {
+                    toi,
+                    target: j,
+                    touching: false,
+                });
+            }
+            None => report.shallow_contacts += 1,
         }
     }
     Ok(best)
@@ -314,7 +452,7 @@ pub(crate) fn sweep_body(
             shape: co1.shape(),
             motion: motion1,
         };
-        if let Some(e) = earliest(&moving, &solid, opts, scene.config.sink, report)? {
+        if let Some(e) = earliest(&moving, &solid, opts, &scene.hand_back(), report)? {
             if best.is_none_or(|b| e.toi.fraction < b.toi.fraction) {
                 best = Some(BodyHit {
                     toi: e.toi,

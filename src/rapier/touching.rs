@@ -3,7 +3,7 @@
 //! allowed: proved with one sound query where it can be, sampled with
 //! parry's contact otherwise (see [`touching_pair`]).
 
-use super::backoff::{BACKOFF, back_off, pair_travel};
+use super::backoff::{BACKOFF, HandBack, back_off, pair_travel, stop_before_gap, stop_when_deep};
 use super::report::CcdReport;
 use crate::InitialContact;
 use crate::convert::{pose_from_iso, vec_from_glam};
@@ -37,29 +37,30 @@ pub(super) fn gap_at(
 }
 
 /// Most samples a pair touching at the start takes over the step.
-const MAX_TOUCH_SAMPLES: usize = 64;
+pub(super) const MAX_TOUCH_SAMPLES: usize = 64;
 
-/// A pair already touching (within the skin) at the start: rapier's
-/// contacts own it, unless it goes deeper than `max(start depth, sink)` or
-/// separates and comes back. Walks the step in samples fine enough that no
-/// point moves more than the sink between two (at most
-/// [`MAX_TOUCH_SAMPLES`]): at the first sample deeper than allowed the time
-/// is bisected down to the last allowed one and returned; at the first
-/// sample apart by more than the skin the sound query takes over for the
-/// rest of the step. This is parry's sampled depth, not a proof: the stage
+/// A pair already touching at the start (apart by no more than `band`,
+/// `HandBack::touch_band`): rapier's contacts own it, unless it goes
+/// deeper than `HandBack::allowed_depth` or separates and comes back. Walks
+/// the step in samples fine enough that no point moves more than
+/// `HandBack::sample_travel` between two (at most [`MAX_TOUCH_SAMPLES`]):
+/// at the first sample deeper than allowed the time is bisected down to
+/// the last allowed one and returned; at the first sample apart by more
+/// than `band` the sound query takes over for the rest of the step. This is parry's sampled depth, not a proof: the stage
 /// is sound for pairs apart at the start; for touching ones it only stops
 /// the solver from pushing a fast body deep.
 pub(super) fn touching_pair(
     moving: &ShapeMotion,
     target: &ShapeMotion,
     start: (f64, Option<Contact>),
-    sink: f64,
+    band: f64,
+    rules: &HandBack,
     opts: &QueryOptions,
     report: &mut CcdReport,
 ) -> Result<Option<Toi>, CcdError> {
     let (s1, m1, s2, m2) = (moving.shape, &moving.motion, target.shape, &target.motion);
     let (gap0, contact0) = start;
-    let allowed = (-gap0).max(sink);
+    let allowed = rules.allowed_depth(gap0, moving, target);
     let lo = opts.time_range.lo;
     let hi = opts.time_range.hi;
     let travel = pair_travel(s1, m1, s2, m2);
@@ -72,10 +73,11 @@ pub(super) fn touching_pair(
     {
         return Ok(None);
     }
-    let samples = ((travel / sink).ceil() as usize).clamp(4, MAX_TOUCH_SAMPLES);
+    let step = rules.sample_travel(s1);
+    let samples = ((travel / step).ceil() as usize).clamp(4, MAX_TOUCH_SAMPLES);
     // parry's contact only needs to look as far as a sample can move: a
     // larger prediction makes it visit every mesh part within it.
-    let reach = opts.skin.max(allowed) + travel / samples as f64 + 1.0e-3;
+    let reach = band.max(allowed) + travel / samples as f64 + 1.0e-3;
     let width = hi - lo;
     let mut prev = lo;
     for k in 1..=samples {
@@ -107,9 +109,15 @@ pub(super) fn touching_pair(
                 Default::default(),
             )));
         }
-        if gap > opts.skin {
-            // Apart: the sound query for the rest of the step.
-            // Hits are the true contact (zero skin), backed off.
+        if gap > band {
+            // Apart: the sound query for the rest of the step. Where the
+            // pair meets again it stops where rapier's sweep stops any
+            // pair (see `backoff`): a ball or capsule `slop` deep, if it
+            // gets that deep; an unrounded pair `slop` before its true
+            // contact (zero skin).
+            if let Some(depth) = rules.deep_stop(gap, moving, target) {
+                return stop_when_deep(moving, target, tau, hi, depth, opts, report);
+            }
             let rest = QueryOptions {
                 time_range: TimeSpan::new(tau, opts.time_range.hi),
                 skin: 0.0,
@@ -118,7 +126,13 @@ pub(super) fn touching_pair(
             if let Some(toi) = time_of_impact(s1, m1, s2, m2, &rest)? {
                 report.evaluations += toi.stats.pair_evaluations;
                 if toi.status != RootStatus::InitiallyTouching {
-                    return Ok(Some(back_off(toi, travel, BACKOFF * opts.skin, tau)));
+                    let stop_gap = rules.stop_gap(moving, target);
+                    let stop = (toi.status == RootStatus::Hit && stop_gap > 0.0)
+                        .then(|| stop_before_gap(moving, target, toi, tau, stop_gap, rules.slop))
+                        .flatten();
+                    return Ok(Some(stop.unwrap_or_else(|| {
+                        back_off(toi, travel, BACKOFF * opts.skin, tau)
+                    })));
                 }
                 prev = tau;
                 continue;

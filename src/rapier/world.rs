@@ -2,6 +2,7 @@
 //! the user's hooks ([`StageWorld`]), and the moved bodies' motions by handle
 //! ([`StepMotions`]).
 
+use super::backoff::HandBack;
 use super::config::CcdConfig;
 use super::moved::Moved;
 use crate::convert::{iso_from_pose, point_from_glam, vec_from_glam};
@@ -19,6 +20,19 @@ pub(crate) struct StageWorld<'a> {
     pub joints: &'a ImpulseJointSet,
     pub hooks: &'a dyn PhysicsHooks,
     pub config: &'a CcdConfig,
+    /// Rapier's allowed linear error, metres: where its own CCD stops a
+    /// pair (see `backoff`).
+    pub slop: f64,
+}
+
+impl StageWorld<'_> {
+    /// The rules a hit is handed back by.
+    pub fn hand_back(&self) -> HandBack {
+        HandBack {
+            sink: self.config.sink,
+            slop: self.slop,
+        }
+    }
 }
 
 /// The moved bodies of this step, by handle, and the step length.
