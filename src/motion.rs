@@ -416,6 +416,17 @@ impl Motion {
         (linear + turning) * (1.0 + 4.0 * f64::EPSILON) + f64::MIN_POSITIVE
     }
 
+    /// An upper bound on how far any point within `radius` metres of the
+    /// frame's origin travels along the unit direction `n` (either way)
+    /// from its start position during the step: the centre's motion along
+    /// `n`, plus the turning chord in any direction.
+    pub fn travel_along(&self, n: &Vector3<f64>, radius: f64) -> f64 {
+        let linear = self.displacement.dot(n).abs() + self.bend.dot(n).abs();
+        let angle = self.rotation.norm();
+        let turning = (self.arm.norm() + radius) * angle.min(2.0);
+        (linear + turning) * (1.0 + 4.0 * f64::EPSILON) + f64::MIN_POSITIVE
+    }
+
     /// The centre of mass over the node.
     fn center_at<E: Enclosure>(&self, tau: E) -> Vector3<E> {
         let mut c = self.center.coords.map(E::constant);

@@ -19,6 +19,7 @@ use crate::error::CcdError;
 use crate::motion::Motion;
 use crate::query::{QueryOptions, ShapeMotion, Toi, time_of_impact};
 use crate::solve::RootStatus;
+use nalgebra::Vector3;
 use rapier3d::parry::shape::{Shape, SharedShape, TypedShape};
 
 /// Share of the skin a clamp at the true contact backs off (when rapier's
@@ -162,14 +163,28 @@ fn core(shape: &dyn Shape) -> Option<(SharedShape, f64)> {
     (r >= 0.0 && r.is_finite()).then_some((core, r as f64))
 }
 
+/// How far the shape's points are from its frame's origin at most, metres.
+fn reach(shape: &dyn Shape) -> f64 {
+    let b = shape.compute_local_bounding_sphere();
+    b.center.length() as f64 + b.radius as f64
+}
+
 /// Bound on how far the pair's points move relative to each other over the
 /// whole step, metres.
 pub(crate) fn pair_travel(s1: &dyn Shape, m1: &Motion, s2: &dyn Shape, m2: &Motion) -> f64 {
-    let radius = |s: &dyn Shape| {
-        let b = s.compute_local_bounding_sphere();
-        b.center.length() as f64 + b.radius as f64
-    };
-    m1.travel_bound(radius(s1)) + m2.travel_bound(radius(s2))
+    m1.travel_bound(reach(s1)) + m2.travel_bound(reach(s2))
+}
+
+/// Bound on how far the pair's points move relative to each other along
+/// the unit direction `n` over the whole step, metres.
+pub(crate) fn pair_travel_along(
+    s1: &dyn Shape,
+    m1: &Motion,
+    s2: &dyn Shape,
+    m2: &Motion,
+    n: &Vector3<f64>,
+) -> f64 {
+    m1.travel_along(n, reach(s1)) + m2.travel_along(n, reach(s2))
 }
 
 /// A hit at the true contact moved back along the motion by `back` metres

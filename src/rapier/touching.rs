@@ -1,9 +1,11 @@
-//! A pair already touching (within the skin) at the start of the step:
-//! rapier's contacts own it, unless the motion drives it deeper than
-//! allowed: proved with one sound query where it can be, sampled with
-//! parry's contact otherwise (see [`touching_pair`]).
+//! A pair already touching at the start of the step: rapier's contacts own
+//! it, unless the motion drives it deeper than allowed: proved from the
+//! pair's travel along its contact normal or with one sound query where it
+//! can be, sampled with parry's contact otherwise (see [`touching_pair`]).
 
-use super::backoff::{BACKOFF, HandBack, back_off, pair_travel, stop_before_gap, stop_when_deep};
+use super::backoff::{
+    BACKOFF, HandBack, back_off, pair_travel, pair_travel_along, stop_before_gap, stop_when_deep,
+};
 use super::report::CcdReport;
 use crate::InitialContact;
 use crate::convert::{pose_from_iso, vec_from_glam};
@@ -69,9 +71,16 @@ pub(super) fn touching_pair(
         return Ok(None);
     }
     if let Some(c) = &contact0
-        && proved_within(moving, target, c, allowed, opts, report)
+        && is_convex(s2)
     {
-        return Ok(None);
+        // The depth of a convex pair is at most its overlap along any fixed
+        // direction; along the start normal that overlap starts at `-gap0`
+        // and grows no faster than the pair travels along it. A body
+        // sliding or resting on it is done here, without a query.
+        let along = pair_travel_along(s1, m1, s2, m2, &vec_from_glam(c.normal1));
+        if along <= allowed + gap0 || proved_within(moving, target, c, allowed, opts, report) {
+            return Ok(None);
+        }
     }
     let step = rules.sample_travel(s1);
     let samples = ((travel / step).ceil() as usize).clamp(4, MAX_TOUCH_SAMPLES);
@@ -144,6 +153,13 @@ pub(super) fn touching_pair(
     Ok(None)
 }
 
+/// Whether parry's depth against `shape` is one least translation (a
+/// convex shape or a half-space), not one per mesh triangle along its own
+/// normal: only then do a fixed direction's bounds bound it.
+fn is_convex(shape: &dyn Shape) -> bool {
+    shape.is_convex() || shape.as_halfspace().is_some()
+}
+
 /// Cheap proof that a touching pair never gets deeper than `allowed`:
 /// shifted `allowed` back along the normal of its contact at the start,
 /// `start`, the moving shape
@@ -164,9 +180,6 @@ fn proved_within(
     report: &mut CcdReport,
 ) -> bool {
     let (s1, m1, s2, m2) = (moving.shape, &moving.motion, target.shape, &target.motion);
-    if !(s2.is_convex() || s2.as_halfspace().is_some()) {
-        return false;
-    }
     let c = start;
     let back = -vec_from_glam(c.normal1) * (allowed * (1.0 + 1.0e-6));
     let apart = QueryOptions {
