@@ -182,11 +182,19 @@ pub fn is_supported(shape1: &dyn Shape, shape2: &dyn Shape) -> bool {
 #[derive(Debug, Default)]
 pub struct Query {
     solver: Solver,
+    /// What the last search spent, hit or miss.
+    spent: SolveStats,
 }
 
 impl Query {
     pub fn new() -> Query {
         Query::default()
+    }
+
+    /// What the last [`Query::many`] spent, whether it found an impact or
+    /// not (a miss's work shows nowhere else).
+    pub fn spent(&self) -> SolveStats {
+        self.spent
     }
 
     /// [`time_of_impact_many`] with this context's buffers.
@@ -196,6 +204,7 @@ impl Query {
         targets: &[ShapeMotion],
         options: &QueryOptions,
     ) -> Result<Option<ManyToi>, CcdError> {
+        self.spent = SolveStats::default();
         let solve_options = options.solve_options()?;
         let mut frames: Vec<FrameDef> = Vec::with_capacity(moving.len() + targets.len());
         frames.extend(moving.iter().map(|m| FrameDef::root(m.motion)));
@@ -228,6 +237,7 @@ impl Query {
             skin: options.skin,
             options: &solve_options,
         })?;
+        self.spent = outcome.stats;
         let Some((i, j)) = hit else {
             return Ok(None);
         };

@@ -72,7 +72,7 @@ pub(crate) fn apply(
             colliders[pair.collider1].shape(),
             colliders[pair.collider2].shape(),
         );
-        match sweep::first_crossing(s1, pair, s2, until, opts) {
+        match sweep::first_crossing(s1, pair, s2, until, opts, report) {
             Ok(Some(_)) if !touches_at(s1, pair, s2, until) => {
                 report.sensor_crossings += 1;
                 for event in [CollisionEvent::Started, CollisionEvent::Stopped] {

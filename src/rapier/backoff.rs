@@ -13,11 +13,12 @@
 //! tumbling elsewhere.
 
 use super::report::CcdReport;
+use super::search;
 use super::touching::{MAX_TOUCH_SAMPLES, gap_at};
 use crate::enclosure::TimeSpan;
 use crate::error::CcdError;
 use crate::motion::Motion;
-use crate::query::{QueryOptions, ShapeMotion, Toi, time_of_impact};
+use crate::query::{QueryOptions, ShapeMotion, Toi};
 use crate::solve::RootStatus;
 use nalgebra::Vector3;
 use rapier3d::parry::shape::{Shape, SharedShape, TypedShape};
@@ -279,9 +280,6 @@ pub(crate) fn stop_when_deep(
         time_range: TimeSpan::new(contact, until),
         ..*opts
     };
-    let found = time_of_impact(core1, &moving.motion, core2, &target.motion, &deep)?;
-    if let Some(toi) = &found {
-        report.evaluations += toi.stats.pair_evaluations;
-    }
+    let found = search::one(core1, &moving.motion, core2, &target.motion, &deep, report)?;
     Ok(found.filter(|t| t.status != RootStatus::InitiallyTouching))
 }

@@ -40,12 +40,13 @@ mod clamp; // cut and carried motions
 mod moved; // a moved body's two poses and travel bounds
 mod push; // fast kinematic bodies carry what they meet
 mod rounds; // the first sweep and the re-sweeps after clamps
+mod search; // the stage's time-of-impact queries, their work counted
 mod select; // which bodies moved, which can tunnel
-mod substep;
+mod substep; // a step cut into pieces at the first predicted impact
 mod sweep; // one body's earliest impact
 mod touching; // pairs already touching at the start
 pub mod turns; // how many whole turns a step made
-mod world; // what the stage reads of the world // a step cut into pieces at the first predicted impact
+mod world; // what the stage reads of the world
 
 pub mod config;
 pub mod dispatcher;

@@ -1,6 +1,5 @@
 //! One fast body's earliest impact over the step, and the sensors it
-//! crosses before it. Every call to the time-of-impact query is in
-//! [`earliest`] and [`first_crossing`].
+//! crosses before it ([`earliest`], [`first_crossing`]).
 
 use super::backoff::{BACKOFF, HandBack, back_off, pair_travel, stop_before_gap, stop_when_deep};
 use super::candidates::{
@@ -8,13 +7,14 @@ use super::candidates::{
 };
 use super::moved::Moved;
 use super::report::CcdReport;
+use super::search;
 use super::touching::{gap_at, touching_pair};
 use super::world::{StageWorld, StepMotions};
 use crate::convert::pose_from_iso;
 use crate::enclosure::TimeSpan;
 use crate::error::CcdError;
 use crate::motion::{Motion, Trajectory};
-use crate::query::{QueryOptions, ShapeMotion, Toi, Witness, time_of_impact, time_of_impact_many};
+use crate::query::{QueryOptions, ShapeMotion, Toi, Witness};
 use crate::solve::RootStatus;
 use rapier3d::parry::bounding_volume::BoundingVolume;
 use rapier3d::parry::query::{Contact, QueryDispatcher};
@@ -263,9 +263,8 @@ fn earliest_piece(
                 motion: targets[j].motion,
             })
             .collect();
-        let found = time_of_impact_many(std::slice::from_ref(moving), &set, &contact)?;
+        let found = search::many(std::slice::from_ref(moving), &set, &contact, report)?;
         let Some(many) = found else { break };
-        report.evaluations += many.toi.stats.pair_evaluations;
         let j = alive[many.target];
         let t = &targets[j];
         if many.toi.status == RootStatus::InitiallyTouching {
@@ -342,15 +341,18 @@ pub(crate) fn first_crossing(
     s2: &dyn Shape,
     until: f64,
     opts: &QueryOptions,
+    report: &mut CcdReport,
 ) -> Result<Option<f64>, CcdError> {
     let opts = QueryOptions {
         skin: 0.0,
         time_range: TimeSpan::new(0.0, until),
         ..*opts
     };
-    Ok(time_of_impact(s1, &pair.motion1, s2, &pair.motion2, &opts)?
-        .filter(|t| t.status != RootStatus::InitiallyTouching)
-        .map(|t| t.fraction))
+    Ok(
+        search::one(s1, &pair.motion1, s2, &pair.motion2, &opts, report)?
+            .filter(|t| t.status != RootStatus::InitiallyTouching)
+            .map(|t| t.fraction),
+    )
 }
 
 /// Sweeps every enabled collider of `body`: the earliest solid impact, and

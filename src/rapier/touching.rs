@@ -7,12 +7,13 @@ use super::backoff::{
     BACKOFF, HandBack, back_off, pair_travel, pair_travel_along, stop_before_gap, stop_when_deep,
 };
 use super::report::CcdReport;
+use super::search;
 use crate::InitialContact;
 use crate::convert::{pose_from_iso, vec_from_glam};
 use crate::enclosure::TimeSpan;
 use crate::error::CcdError;
 use crate::motion::{Motion, Trajectory};
-use crate::query::{QueryOptions, ShapeMotion, Toi, Witness, contact, time_of_impact};
+use crate::query::{QueryOptions, ShapeMotion, Toi, Witness, contact};
 use crate::solve::RootStatus;
 use rapier3d::parry::query::Contact;
 use rapier3d::parry::shape::Shape;
@@ -132,8 +133,7 @@ pub(super) fn touching_pair(
                 skin: 0.0,
                 ..*opts
             };
-            if let Some(toi) = time_of_impact(s1, m1, s2, m2, &rest)? {
-                report.evaluations += toi.stats.pair_evaluations;
+            if let Some(toi) = search::one(s1, m1, s2, m2, &rest, report)? {
                 if toi.status != RootStatus::InitiallyTouching {
                     let stop_gap = rules.stop_gap(moving, target);
                     let stop = (toi.status == RootStatus::Hit && stop_gap > 0.0)
@@ -187,12 +187,9 @@ fn proved_within(
         initial_contact: InitialContact::Report,
         ..*opts
     };
-    match time_of_impact(s1, &m1.shifted(back), s2, m2, &apart) {
+    match search::one(s1, &m1.shifted(back), s2, m2, &apart, report) {
         Ok(None) => true,
-        Ok(Some(toi)) => {
-            report.evaluations += toi.stats.pair_evaluations;
-            false
-        }
+        Ok(Some(_)) => false,
         Err(_) => false,
     }
 }

@@ -1,0 +1,42 @@
+//! The stage's calls to the time-of-impact query, counted: each adds what
+//! it spent, hit or miss, to the step's report (`CcdReport::evaluations`),
+//! so the profile shows the work of the searches that found nothing too.
+
+use super::report::CcdReport;
+use crate::error::CcdError;
+use crate::motion::Motion;
+use crate::query::{ManyToi, Query, QueryOptions, ShapeMotion, Toi};
+use rapier3d::parry::shape::Shape;
+
+/// [`crate::query::time_of_impact`], counted.
+pub(crate) fn one(
+    s1: &dyn Shape,
+    m1: &Motion,
+    s2: &dyn Shape,
+    m2: &Motion,
+    opts: &QueryOptions,
+    report: &mut CcdReport,
+) -> Result<Option<Toi>, CcdError> {
+    let moving = [ShapeMotion {
+        shape: s1,
+        motion: *m1,
+    }];
+    let targets = [ShapeMotion {
+        shape: s2,
+        motion: *m2,
+    }];
+    Ok(many(&moving, &targets, opts, report)?.map(|hit| hit.toi))
+}
+
+/// [`crate::query::time_of_impact_many`], counted.
+pub(crate) fn many(
+    moving: &[ShapeMotion],
+    targets: &[ShapeMotion],
+    opts: &QueryOptions,
+    report: &mut CcdReport,
+) -> Result<Option<ManyToi>, CcdError> {
+    let mut query = Query::new();
+    let found = query.many(moving, targets, opts);
+    report.evaluations += query.spent().pair_evaluations;
+    found
+}
