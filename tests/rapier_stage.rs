@@ -124,6 +124,64 @@ fn a_compound_of_cylinders_at_200_m_s_stops_at_a_thin_wall() {
     println!("rapier's CCD tunnels the compound: {rapier_tunnels}");
 }
 
+/// The gap (metres, negative: depth) between a projectile fired at 200 m/s
+/// at the thin wall and the wall, at the end of the step its CCD stopped it
+/// (the first step that ends within 2 cm of the wall).
+fn gap_at_stop(ccd: Ccd, collider: ColliderBuilder) -> f32 {
+    let mut run = Run::new(ccd, Vector::ZERO);
+    let wall = run
+        .world
+        .insert(
+            RigidBodyBuilder::fixed(),
+            ColliderBuilder::cuboid(0.05, 2.0, 2.0),
+        )
+        .1;
+    let h = run.dynamic(
+        RigidBodyBuilder::dynamic()
+            .translation(Vector::new(-5.0, 0.0, 0.0))
+            .linvel(Vector::new(200.0, 0.0, 0.0)),
+        collider,
+    );
+    let moving = run.world.bodies[h].colliders()[0];
+    for _ in 0..STEPS {
+        run.step();
+        let (a, b) = (&run.world.colliders[moving], &run.world.colliders[wall]);
+        let found =
+            rapier3d::parry::query::contact(a.position(), a.shape(), b.position(), b.shape(), 0.02);
+        if let Ok(Some(c)) = found {
+            return c.dist;
+        }
+    }
+    f32::INFINITY
+}
+
+/// Where a clamp leaves a body is where rapier's own CCD leaves it (its
+/// rest poses are the reference): a box `slop` (rapier's allowed linear
+/// error, 5 mm) before the wall, a ball `slop` into it, each within parry's
+/// tolerance of a quarter slop. A clamp at the contact itself, or a skin
+/// before it, lands a few millimetres elsewhere, and a landing body then
+/// tumbles elsewhere.
+#[test]
+fn a_clamped_body_stands_where_rapiers_ccd_would_stop_it() {
+    let slop = IntegrationParameters::default().allowed_linear_error();
+    for (name, collider, stop) in [
+        ("box", ColliderBuilder::cuboid(0.25, 0.25, 0.25), slop),
+        ("ball", ColliderBuilder::ball(0.25), -slop),
+    ] {
+        let ours = gap_at_stop(Ccd::Affine, collider.clone());
+        let theirs = gap_at_stop(Ccd::Rapier, collider);
+        println!("{name}: gap at the stop {ours:.5} m (rapier's CCD {theirs:.5} m, target {stop})");
+        assert!(
+            (ours - stop).abs() <= 0.25 * slop,
+            "{name}: stopped {ours} m from the wall, rapier stops at {stop} m"
+        );
+        assert!(
+            (theirs - stop).abs() <= 0.25 * slop,
+            "{name}: rapier's CCD itself stopped at {theirs} m (expected {stop} m)"
+        );
+    }
+}
+
 /// A shape falling at 200 m/s onto a half-space at y = 0: the lowest y its
 /// centre reached at a step end.
 fn fall_on_half_space(ccd: Ccd, collider: ColliderBuilder) -> f32 {

@@ -283,3 +283,97 @@ pub(crate) fn stop_when_deep(
     let found = search::one(core1, &moving.motion, core2, &target.motion, &deep, report)?;
     Ok(found.filter(|t| t.status != RootStatus::InitiallyTouching))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::{Isometry3, Point3};
+    use rapier3d::parry::shape::{Ball, Cuboid, Cylinder, TriMesh};
+    use rapier3d::prelude::Vector;
+
+    const SLOP: f64 = 0.005;
+
+    fn rules() -> HandBack {
+        HandBack {
+            sink: 0.005,
+            slop: SLOP,
+        }
+    }
+
+    fn fixed() -> Motion {
+        Motion::fixed(Isometry3::identity()).unwrap()
+    }
+
+    fn moving() -> Motion {
+        let v = Vector3::new(10.0, 0.0, 0.0);
+        Motion::from_velocities(Isometry3::identity(), Point3::origin(), v, v, 1.0 / 60.0).unwrap()
+    }
+
+    fn gap(s1: &dyn Shape, s2: &dyn Shape, target: Motion) -> f64 {
+        let a = ShapeMotion {
+            shape: s1,
+            motion: moving(),
+        };
+        let b = ShapeMotion {
+            shape: s2,
+            motion: target,
+        };
+        rules().stop_gap(&a, &b)
+    }
+
+    /// parry's sweep target, `max(slop, r1 + r2 - slop)` between the cores,
+    /// as a gap of the full shapes; the contact where rapier casts instead.
+    #[test]
+    fn the_stop_gap_follows_parrys_sweep_target() {
+        let cube = Cuboid::new(Vector::splat(0.5));
+        let floor = TriMesh::new(
+            vec![
+                Vector::new(-1.0, 0.0, -1.0),
+                Vector::new(1.0, 0.0, -1.0),
+                Vector::new(0.0, 0.0, 1.0),
+            ],
+            vec![[0, 1, 2]],
+        )
+        .unwrap();
+        let ball = Ball::new(0.25);
+        let bead = Ball::new(0.002);
+        let close = |a: f64, b: f64| (a - b).abs() < 1.0e-9;
+        assert!(close(gap(&cube, &cube, fixed()), SLOP));
+        assert!(close(gap(&cube, &floor, fixed()), SLOP));
+        assert!(close(gap(&ball, &floor, fixed()), -SLOP));
+        assert!(close(gap(&ball, &cube, fixed()), -SLOP));
+        // Roundings below two slops: the cores stop a slop apart.
+        assert!(close(gap(&bead, &cube, fixed()), SLOP - 0.002));
+        // Rapier casts these to the contact.
+        assert_eq!(gap(&cube, &cube, moving()), 0.0);
+        assert_eq!(gap(&Cylinder::new(0.5, 0.2), &cube, fixed()), 0.0);
+        assert_eq!(gap(&cube, &Cylinder::new(0.5, 0.2), fixed()), 0.0);
+    }
+
+    /// A ball shallower than rapier's stop gets its stop from the cores; one
+    /// about that deep already is the contacts'.
+    #[test]
+    fn only_balls_shallower_than_the_stop_get_a_deep_stop() {
+        let ball = Ball::new(0.25);
+        let cube = Cuboid::new(Vector::splat(0.5));
+        let (a, b) = (
+            ShapeMotion {
+                shape: &ball,
+                motion: moving(),
+            },
+            ShapeMotion {
+                shape: &cube,
+                motion: fixed(),
+            },
+        );
+        let near = |d: Option<f64>| d.is_some_and(|d| (d - SLOP).abs() < 1.0e-9);
+        assert!(near(rules().deep_stop(0.001, &a, &b)));
+        assert!(near(rules().deep_stop(-0.002, &a, &b)));
+        assert_eq!(rules().deep_stop(-0.004, &a, &b), None);
+        let c = ShapeMotion {
+            shape: &cube,
+            motion: moving(),
+        };
+        assert_eq!(rules().deep_stop(0.001, &c, &b), None);
+    }
+}
