@@ -146,15 +146,7 @@ pub fn time_of_impact(
     motion2: &Motion,
     options: &QueryOptions,
 ) -> Result<Option<Toi>, CcdError> {
-    let moving = [ShapeMotion {
-        shape: shape1,
-        motion: *motion1,
-    }];
-    let targets = [ShapeMotion {
-        shape: shape2,
-        motion: *motion2,
-    }];
-    Ok(time_of_impact_many(&moving, &targets, options)?.map(|hit| hit.toi))
+    Query::default().one(shape1, motion1, shape2, motion2, options)
 }
 
 /// The earliest time any of `moving` comes within `options.skin` of any of
@@ -191,7 +183,27 @@ impl Query {
         Query::default()
     }
 
-    /// What the last [`Query::many`] spent, whether it found an impact or
+    /// [`time_of_impact`] with this context's buffers.
+    pub fn one(
+        &mut self,
+        shape1: &dyn Shape,
+        motion1: &Motion,
+        shape2: &dyn Shape,
+        motion2: &Motion,
+        options: &QueryOptions,
+    ) -> Result<Option<Toi>, CcdError> {
+        let moving = [ShapeMotion {
+            shape: shape1,
+            motion: *motion1,
+        }];
+        let targets = [ShapeMotion {
+            shape: shape2,
+            motion: *motion2,
+        }];
+        Ok(self.many(&moving, &targets, options)?.map(|hit| hit.toi))
+    }
+
+    /// What the last [`Query::many`] (or [`Query::one`]) spent, whether it found an impact or
     /// not (a miss's work shows nowhere else).
     pub fn spent(&self) -> SolveStats {
         self.spent

@@ -17,15 +17,10 @@ pub(crate) fn one(
     opts: &QueryOptions,
     report: &mut CcdReport,
 ) -> Result<Option<Toi>, CcdError> {
-    let moving = [ShapeMotion {
-        shape: s1,
-        motion: *m1,
-    }];
-    let targets = [ShapeMotion {
-        shape: s2,
-        motion: *m2,
-    }];
-    Ok(many(&moving, &targets, opts, report)?.map(|hit| hit.toi))
+    let mut query = Query::new();
+    let found = query.one(s1, m1, s2, m2, opts);
+    report.evaluations += query.spent().pair_evaluations;
+    found
 }
 
 /// [`crate::query::time_of_impact_many`], counted.
