@@ -171,7 +171,6 @@ fn sweep_candidates(
     let scene = q.scene;
     let reach = 2.0 * opts.skin + 1.0e-4;
     let motions = StepMotions::new(current, q.dt);
-    ws.motions.clear();
     for c in cands.iter_mut().filter(|c| !c.done) {
         let set = if c.swept { fresh } else { front };
         c.swept = true;

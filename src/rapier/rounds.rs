@@ -78,6 +78,7 @@ pub(crate) fn sweep_rounds(
         dispatcher: narrow_phase.query_dispatcher(),
         dt,
     };
+    ws.motions.clear();
     let mut rounds = Rounds::new(moved);
     let mut dirty = rounds.push_and_start(&query, opts, ws, report);
     let resweep = QueryOptions {
@@ -194,7 +195,6 @@ impl Rounds {
         report: &mut CcdReport,
     ) -> Vec<(usize, sweep::BodyHit)> {
         let motions = StepMotions::new(&self.current, q.dt);
-        ws.motions.clear();
         let mut found = Vec::new();
         for &(i, against) in dirty {
             let body = &self.current[i];

@@ -9,7 +9,7 @@ use super::moved::Moved;
 use super::report::CcdReport;
 use super::search;
 use super::touching::{gap_at, touching_pair};
-use super::world::{StageWorld, StepMotions};
+use super::world::{MotionCache, StageWorld, StepMotions};
 use crate::convert::pose_from_iso;
 use crate::enclosure::TimeSpan;
 use crate::error::CcdError;
@@ -21,7 +21,7 @@ use rapier3d::parry::query::{Contact, QueryDispatcher};
 use rapier3d::parry::shape::Shape;
 use rapier3d::prelude::RigidBodyHandle;
 use rapier3d::prelude::{BroadPhaseBvh, ColliderHandle};
-use std::collections::{HashMap, HashSet};
+use std::collections::HashSet;
 
 /// The earliest solid impact of one fast body.
 #[derive(Clone, Copy, Debug)]
@@ -69,12 +69,12 @@ pub(crate) struct Sweeper<'w, 's> {
     pub dt: f64,
 }
 
-/// Reused buffers; `motions` caches target motions for one step (clear it
-/// between steps).
+/// Reused buffers; `motions` caches collider motions for one step (clear
+/// it between steps).
 #[derive(Default)]
 pub(crate) struct Workspace {
     candidates: Vec<Candidate>,
-    pub motions: HashMap<ColliderHandle, Motion>,
+    pub motions: MotionCache,
 }
 
 /// The earliest impact of one collider: when, against which target, and
@@ -378,7 +378,7 @@ pub(crate) fn sweep_body(
         let Some(co1) = scene.colliders.get(h1).filter(|c| c.is_enabled()) else {
             continue;
         };
-        let motion1 = motions.collider(co1, scene.bodies)?;
+        let motion1 = ws.motions.get(motions, h1, co1, scene.bodies)?;
         let swept = swept_aabb(co1.shape(), &motion1);
         let mut failure = None;
         let cache = &mut ws.motions;
@@ -390,16 +390,8 @@ pub(crate) fn sweep_body(
             h1,
             co1,
             &swept,
-            |h2, co2| match cache
-                .get(&h2)
-                .copied()
-                .map(Ok)
-                .unwrap_or_else(|| motions.collider(co2, scene.bodies))
-            {
-                Ok(m) => {
-                    cache.insert(h2, m);
-                    Some(swept_aabb(co2.shape(), &m))
-                }
+            |h2, co2| match cache.get(motions, h2, co2, scene.bodies) {
+                Ok(m) => Some(swept_aabb(co2.shape(), &m)),
                 Err(e) => {
                     failure = Some(e);
                     None
@@ -426,10 +418,7 @@ pub(crate) fn sweep_body(
             if !wanted {
                 continue;
             }
-            let motion2 = match ws.motions.get(&c.handle) {
-                Some(m) => *m,
-                None => motions.collider(co2, scene.bodies)?,
-            };
+            let motion2 = ws.motions.get(motions, c.handle, co2, scene.bodies)?;
             match c.interaction {
                 Interaction::Solid => {
                     solid.push(ShapeMotion {

@@ -9,7 +9,8 @@ use crate::convert::{iso_from_pose, point_from_glam, vec_from_glam};
 use crate::error::CcdError;
 use crate::motion::Motion;
 use rapier3d::prelude::{
-    Collider, ColliderSet, ImpulseJointSet, PhysicsHooks, RigidBodyHandle, RigidBodySet, Vector,
+    Collider, ColliderHandle, ColliderSet, ImpulseJointSet, PhysicsHooks, Pose, RigidBodyHandle,
+    RigidBodySet, Vector,
 };
 use std::collections::HashMap;
 
@@ -32,6 +33,60 @@ impl StageWorld<'_> {
             sink: self.config.sink,
             slop: self.slop,
         }
+    }
+}
+
+/// Collider motions built this step, each with what it was built from:
+/// `Motion::from_poses` prepares the bounds of the rotation series (about a
+/// microsecond of interval products), and a step asks for the same
+/// motions in every round and every push. A body whose motion a round cut
+/// gets a new one. Clear it between steps.
+#[derive(Default)]
+pub(crate) struct MotionCache {
+    built: HashMap<ColliderHandle, (Option<Stamp>, Motion)>,
+}
+
+/// What a collider's motion is built from: its body's two poses, turn hint
+/// and acceleration, and the step length (`None`: the collider's body did
+/// not move, its motion is its pose).
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Stamp {
+    start: Pose,
+    end: Pose,
+    angvel: Vector,
+    accel: Vector,
+    dt: f64,
+}
+
+impl MotionCache {
+    pub fn clear(&mut self) {
+        self.built.clear();
+    }
+
+    /// The motion of collider `handle` over the step, built once per body
+    /// motion.
+    pub fn get(
+        &mut self,
+        motions: &StepMotions,
+        handle: ColliderHandle,
+        co: &Collider,
+        bodies: &RigidBodySet,
+    ) -> Result<Motion, CcdError> {
+        let stamp = co.parent().and_then(|h| motions.body(h)).map(|m| Stamp {
+            start: m.start,
+            end: m.end,
+            angvel: m.angvel,
+            accel: m.accel,
+            dt: motions.dt,
+        });
+        if let Some((built, motion)) = self.built.get(&handle)
+            && *built == stamp
+        {
+            return Ok(*motion);
+        }
+        let motion = motions.collider(co, bodies)?;
+        self.built.insert(handle, (stamp, motion));
+        Ok(motion)
     }
 }
 
