@@ -427,6 +427,19 @@ impl Motion {
         (linear + turning) * (1.0 + 4.0 * f64::EPSILON) + f64::MIN_POSITIVE
     }
 
+    /// An upper bound on how much the distance between a point within
+    /// `radius` of this frame's origin and a point within `other_radius`
+    /// of `other`'s changes during the step: their centres' relative
+    /// motion plus both turning chords. Two bodies flying side by side
+    /// barely move relative to each other, however fast they go.
+    pub fn relative_travel_bound(&self, radius: f64, other: &Motion, other_radius: f64) -> f64 {
+        let linear =
+            (self.displacement - other.displacement).norm() + (self.bend - other.bend).norm();
+        let turning = (self.arm.norm() + radius) * self.rotation.norm().min(2.0)
+            + (other.arm.norm() + other_radius) * other.rotation.norm().min(2.0);
+        (linear + turning) * (1.0 + 8.0 * f64::EPSILON) + f64::MIN_POSITIVE
+    }
+
     /// The centre of mass over the node.
     fn center_at<E: Enclosure>(&self, tau: E) -> Vector3<E> {
         let mut c = self.center.coords.map(E::constant);

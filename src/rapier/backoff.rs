@@ -176,6 +176,18 @@ pub(crate) fn pair_travel(s1: &dyn Shape, m1: &Motion, s2: &dyn Shape, m2: &Moti
     m1.travel_bound(reach(s1)) + m2.travel_bound(reach(s2))
 }
 
+/// Bound on how much the distance between any point of one shape and any
+/// point of the other changes over the step, metres (their relative
+/// motion: small for two bodies moving together).
+pub(crate) fn pair_relative_travel(
+    s1: &dyn Shape,
+    m1: &Motion,
+    s2: &dyn Shape,
+    m2: &Motion,
+) -> f64 {
+    m1.relative_travel_bound(reach(s1), m2, reach(s2))
+}
+
 /// Bound on how far the pair's points move relative to each other along
 /// the unit direction `n` over the whole step, metres.
 pub(crate) fn pair_travel_along(

@@ -1,7 +1,9 @@
 //! One fast body's earliest impact over the step, and the sensors it
 //! crosses before it ([`earliest`], [`first_crossing`]).
 
-use super::backoff::{BACKOFF, HandBack, back_off, pair_travel, stop_before_gap, stop_when_deep};
+use super::backoff::{
+    BACKOFF, HandBack, back_off, pair_relative_travel, pair_travel, stop_before_gap, stop_when_deep,
+};
 use super::candidates::{
     Candidate, Interaction, MeshPiece, gather, interaction, mesh_triangles, swept_aabb,
 };
@@ -16,11 +18,11 @@ use crate::error::CcdError;
 use crate::motion::{Motion, Trajectory};
 use crate::query::{QueryOptions, ShapeMotion, Toi, Witness};
 use crate::solve::RootStatus;
-use rapier3d::parry::bounding_volume::BoundingVolume;
+use rapier3d::parry::bounding_volume::{Aabb, BoundingVolume};
 use rapier3d::parry::query::{Contact, QueryDispatcher};
 use rapier3d::parry::shape::Shape;
 use rapier3d::prelude::RigidBodyHandle;
-use rapier3d::prelude::{BroadPhaseBvh, ColliderHandle};
+use rapier3d::prelude::{BroadPhaseBvh, ColliderHandle, Vector};
 use std::collections::HashSet;
 
 /// The earliest solid impact of one fast body.
@@ -234,7 +236,15 @@ fn earliest_piece(
             }
             continue;
         }
-        if !moving_box.intersects(&start_box(t.shape, &t.motion)) {
+        let target_box = start_box(t.shape, &t.motion);
+        if !moving_box.intersects(&target_box) {
+            // Farther apart at the start than their points can move
+            // relative to each other: they cannot meet (two bodies flying
+            // side by side, a body far from a fixed one).
+            let apart = box_gap(&moving_box, &target_box);
+            if apart > pair_relative_travel(moving.shape, &moving.motion, t.shape, &t.motion) {
+                continue;
+            }
             alive.push(j);
             continue;
         }
@@ -331,6 +341,21 @@ fn earliest_piece(
         }
     }
     Ok(best)
+}
+
+/// A lower bound of the distance between anything inside two boxes,
+/// metres (0 when they meet), less the rounding of `f32` boxes (a few
+/// parts in 10⁷ of the coordinates).
+fn box_gap(a: &Aabb, b: &Aabb) -> f64 {
+    let below = (b.mins - a.maxs).max(Vector::ZERO);
+    let above = (a.mins - b.maxs).max(Vector::ZERO);
+    let scale = a
+        .mins
+        .abs()
+        .max(a.maxs.abs())
+        .max(b.mins.abs().max(b.maxs.abs()));
+    let rounding = 1.0e-6 * scale.max_element() as f64 + 1.0e-6;
+    ((below + above).length() as f64 - rounding).max(0.0)
 }
 
 /// When a sensor pair first touches before `until` (a fraction of the
