@@ -26,7 +26,7 @@
 //! about 70 enclosure products.
 
 use super::Side;
-use super::support::{Convex, ORTHO_SLACK, dot, mul, norm_up, tr_mul};
+use super::support::{Convex, Core, ORTHO_SLACK, dot, mul, norm_up, tr_mul};
 use crate::convert::{pose_from_iso, vec_from_glam};
 use crate::enclosure::rounding::up;
 use crate::enclosure::{Enclosure, TimeSpan};
@@ -104,6 +104,9 @@ impl SupportMap {
     /// the frames' origins, or any axis.
     fn direction(&self, ia: &Isometry3<f64>, ib: &Isometry3<f64>) -> Vector3<f64> {
         let rel = ia.inv_mul(ib);
+        if let Some(n) = core_direction(&self.a.core, &self.b.core, &rel) {
+            return n;
+        }
         let pos12 = pose_from_iso(&rel);
         let query = || {
             rapier3d::parry::query::contact(
@@ -203,6 +206,101 @@ impl SupportMap {
                 - up(self.skin * norm);
         }
     }
+}
+
+/// The closest points of two cores with a closed form (points, segments,
+/// boxes) as a unit direction from `a` towards `b`, in `a`'s frame (`rel`:
+/// `b`'s pose in `a`'s frame), in plain `f64` with no GJK: the direction a
+/// capsule pair asks for on every node. Any direction gives a sound axis;
+/// this one is parry's closest-points normal up to rounding. `None` for
+/// other cores, and when the cores (nearly) meet: parry's penetration
+/// normal is the better hint then.
+fn core_direction(a: &Core, b: &Core, rel: &Isometry3<f64>) -> Option<Vector3<f64>> {
+    let segment = |c: &Core| match c {
+        Core::Point => Some([Vector3::zeros(); 2]),
+        Core::Segment(s) => Some(*s),
+        _ => None,
+    };
+    let from_a_to_b = match (segment(a), segment(b), a, b) {
+        (Some(sa), Some(sb), _, _) => {
+            let sb = sb
+                .map(|p| rel * nalgebra::Point3::from(p))
+                .map(|p| p.coords);
+            let (p, q) = segment_segment(&sa, &sb);
+            q - p
+        }
+        (Some(sa), None, _, Core::Cuboid(half)) => {
+            // In the box's frame, then back.
+            let inv = rel.inverse();
+            let sa = sa.map(|p| (inv * nalgebra::Point3::from(p)).coords);
+            let (p, q) = segment_box(&sa, half);
+            rel.rotation * (q - p)
+        }
+        (None, Some(sb), Core::Cuboid(half), _) => {
+            let sb = sb.map(|p| (rel * nalgebra::Point3::from(p)).coords);
+            let (p, q) = segment_box(&sb, half);
+            p - q
+        }
+        _ => return None,
+    };
+    from_a_to_b.try_normalize(1.0e-9)
+}
+
+/// The closest points of segments `a` and `b` (on `a`, on `b`): the
+/// parameters of the unclamped closest pair, clamped to the segments in
+/// turn (exact for segments; points are segments of length 0).
+fn segment_segment(a: &[Vector3<f64>; 2], b: &[Vector3<f64>; 2]) -> (Vector3<f64>, Vector3<f64>) {
+    let (u, v, w) = (a[1] - a[0], b[1] - b[0], a[0] - b[0]);
+    let (uu, vv, uv, uw, vw) = (u.dot(&u), v.dot(&v), u.dot(&v), u.dot(&w), v.dot(&w));
+    let tiny = 1.0e-300;
+    let (s, t) = if uu <= tiny && vv <= tiny {
+        (0.0, 0.0)
+    } else if uu <= tiny {
+        (0.0, (vw / vv).clamp(0.0, 1.0))
+    } else if vv <= tiny {
+        ((-uw / uu).clamp(0.0, 1.0), 0.0)
+    } else {
+        let det = uu * vv - uv * uv;
+        let s = if det > tiny {
+            ((uv * vw - vv * uw) / det).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        let t = (uv * s + vw) / vv;
+        if t < 0.0 {
+            ((-uw / uu).clamp(0.0, 1.0), 0.0)
+        } else if t > 1.0 {
+            (((uv - uw) / uu).clamp(0.0, 1.0), 1.0)
+        } else {
+            (s, t)
+        }
+    };
+    (a[0] + u * s, b[0] + v * t)
+}
+
+/// Points of segment `s` and of the box of half-extents `half` (centred at
+/// the origin, in its frame) close to each other: alternating projections
+/// from the segment's middle (each step brings the pair closer; a few give
+/// a direction as good as parry's for an axis). (on the segment, in the box)
+fn segment_box(s: &[Vector3<f64>; 2], half: &Vector3<f64>) -> (Vector3<f64>, Vector3<f64>) {
+    let d = s[1] - s[0];
+    let dd = d.dot(&d);
+    let on_segment = |q: &Vector3<f64>| {
+        let t = if dd > 1.0e-300 {
+            ((q - s[0]).dot(&d) / dd).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        s[0] + d * t
+    };
+    let in_box = |p: &Vector3<f64>| Vector3::from_fn(|i, _| p[i].clamp(-half[i], half[i]));
+    let mut p = 0.5 * (s[0] + s[1]);
+    let mut q = in_box(&p);
+    for _ in 0..4 {
+        p = on_segment(&q);
+        q = in_box(&p);
+    }
+    (p, q)
 }
 
 /// The unit normal of a triangle core (none for a degenerate one, or any
