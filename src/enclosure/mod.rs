@@ -228,3 +228,32 @@ pub trait Enclosure:
     /// Intervals do not depend on the symbol and come back unchanged.
     fn restrict(self, from: TimeSpan, to: TimeSpan) -> Self;
 }
+
+/// The least and the greatest of a few enclosures, each range taken once
+/// (chaining [`Enclosure::min`] and [`Enclosure::max`] takes both
+/// operands' ranges on every call: a dozen ranges for a box–triangle
+/// axis). One below (above) all the others at every time of the node is
+/// kept as it is, as `min`/`max` keep it; otherwise the bounds of the
+/// least (greatest) value at any time.
+pub(crate) fn least_greatest<E: Enclosure, const N: usize>(p: &[E; N]) -> (E, E) {
+    let r = p.each_ref().map(|x| x.range());
+    let lowest = (0..N)
+        .min_by(|&i, &j| r[i].lo.total_cmp(&r[j].lo))
+        .unwrap_or(0);
+    let highest = (0..N)
+        .max_by(|&i, &j| r[i].hi.total_cmp(&r[j].hi))
+        .unwrap_or(0);
+    let least = if (0..N).all(|j| j == lowest || r[lowest].hi <= r[j].lo) {
+        p[lowest]
+    } else {
+        let hi = r.iter().map(|x| x.hi).fold(f64::INFINITY, f64::min);
+        E::from_interval(Interval::new(r[lowest].lo, hi))
+    };
+    let greatest = if (0..N).all(|j| j == highest || r[highest].lo >= r[j].hi) {
+        p[highest]
+    } else {
+        let lo = r.iter().map(|x| x.lo).fold(f64::NEG_INFINITY, f64::max);
+        E::from_interval(Interval::new(lo, r[highest].hi))
+    };
+    (least, greatest)
+}

@@ -15,7 +15,7 @@
 use super::Side;
 use super::support::ORTHO_SLACK;
 use crate::enclosure::rounding::up;
-use crate::enclosure::{Enclosure, Interval, TimeSpan};
+use crate::enclosure::{Enclosure, TimeSpan, least_greatest};
 use nalgebra::Vector3;
 
 #[derive(Clone, Debug)]
@@ -93,32 +93,4 @@ impl CuboidTriangle {
             }
         }
     }
-}
-
-/// The least and the greatest of three enclosures, each range taken once
-/// (chaining `Enclosure::min` and `max` takes both operands' ranges on
-/// every call, a dozen ranges an axis): an enclosure below (above) the
-/// others at every time is kept as it is, otherwise the bounds of the
-/// least (greatest) value at any time.
-fn least_greatest<E: Enclosure>(p: &[E; 3]) -> (E, E) {
-    let r = p.each_ref().map(|x| x.range());
-    let lowest = (0..3)
-        .min_by(|&i, &j| r[i].lo.total_cmp(&r[j].lo))
-        .unwrap_or(0);
-    let highest = (0..3)
-        .max_by(|&i, &j| r[i].hi.total_cmp(&r[j].hi))
-        .unwrap_or(0);
-    let least = if (0..3).all(|j| j == lowest || r[lowest].hi <= r[j].lo) {
-        p[lowest]
-    } else {
-        let hi = r[0].hi.min(r[1].hi).min(r[2].hi);
-        E::from_interval(Interval::new(r[lowest].lo, hi))
-    };
-    let greatest = if (0..3).all(|j| j == highest || r[highest].lo >= r[j].hi) {
-        p[highest]
-    } else {
-        let lo = r[0].lo.max(r[1].lo).max(r[2].lo);
-        E::from_interval(Interval::new(lo, r[highest].hi))
-    };
-    (least, greatest)
 }

@@ -26,7 +26,7 @@ use super::Side;
 use super::primitives::{
     closest_on_triangle, closest_segment_segment, cross, dot, skin_norm, skin_norm_const,
 };
-use crate::enclosure::{Enclosure, TimeSpan};
+use crate::enclosure::{Enclosure, TimeSpan, least_greatest};
 use crate::motion::{Pose, Trajectory};
 use nalgebra::{Isometry3, Vector3};
 
@@ -46,8 +46,8 @@ pub(crate) struct TriangleTriangle {
 fn gaps<E: Enclosure>(d: &Vector3<E>, p: &[Vector3<E>; 3], q: &[Vector3<E>; 3]) -> (E, E) {
     let dp = p.map(|x| dot(d, &x));
     let dq = q.map(|x| dot(d, &x));
-    let (p_lo, p_hi) = (dp[0].min(dp[1]).min(dp[2]), dp[0].max(dp[1]).max(dp[2]));
-    let (q_lo, q_hi) = (dq[0].min(dq[1]).min(dq[2]), dq[0].max(dq[1]).max(dq[2]));
+    let (p_lo, p_hi) = least_greatest(&dp);
+    let (q_lo, q_hi) = least_greatest(&dq);
     (q_lo - p_hi, p_lo - q_hi)
 }
 
