@@ -149,6 +149,13 @@ fn swept_rounding(shape: &dyn Shape) -> Option<f64> {
     }
 }
 
+/// The roundings of a pair that [`stop_when_deep`] can query on their
+/// cores, metres (0 when neither shape has one).
+pub(crate) fn roundings(moving: &ShapeMotion, target: &ShapeMotion) -> f64 {
+    let r = |s: &dyn Shape| core(s).map_or(0.0, |(_, r)| r);
+    r(moving.shape) + r(target.shape)
+}
+
 /// A rounded shape parry's sweep takes: its core and rounding; `None`
 /// for any other shape.
 fn core(shape: &dyn Shape) -> Option<(SharedShape, f64)> {

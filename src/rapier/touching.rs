@@ -4,7 +4,8 @@
 //! can be, sampled with parry's contact otherwise (see [`touching_pair`]).
 
 use super::backoff::{
-    BACKOFF, HandBack, back_off, pair_travel, pair_travel_along, stop_before_gap, stop_when_deep,
+    BACKOFF, HandBack, back_off, pair_travel, pair_travel_along, roundings, stop_before_gap,
+    stop_when_deep,
 };
 use super::report::CcdReport;
 use super::search;
@@ -38,6 +39,10 @@ pub(super) fn gap_at(
         Err(_) => None,
     }
 }
+
+/// How much deeper than allowed a rounded touching pair is stopped at,
+/// metres (see [`touching_pair`]).
+const DEEPER: f64 = 1.0e-4;
 
 /// Most samples a pair touching at the start takes over the step.
 pub(super) const MAX_TOUCH_SAMPLES: usize = 64;
@@ -79,9 +84,24 @@ pub(super) fn touching_pair(
         // and grows no faster than the pair travels along it. A body
         // sliding or resting on it is done here, without a query.
         let along = pair_travel_along(s1, m1, s2, m2, &vec_from_glam(c.normal1));
-        if along <= allowed + gap0 || proved_within(moving, target, c, allowed, opts, report) {
+        if along <= allowed + gap0 {
             return Ok(None);
         }
+    }
+    // A ball or capsule (roundings beyond the allowed depth): it is deeper
+    // exactly when its core comes closer than `r₁ + r₂ − allowed`, one
+    // sound query for the whole step, no samples. The allowed depth may be
+    // the start depth itself: the query asks for a tenth of a millimetre
+    // more, so the start is not already there (parry's `f32` depth is
+    // good to far less).
+    if roundings(moving, target) > allowed + DEEPER {
+        return stop_when_deep(moving, target, lo, hi, allowed + DEEPER, opts, report);
+    }
+    if let Some(c) = &contact0
+        && is_convex(s2)
+        && proved_within(moving, target, c, allowed, opts, report)
+    {
+        return Ok(None);
     }
     let step = rules.sample_travel(s1);
     let samples = ((travel / step).ceil() as usize).clamp(4, MAX_TOUCH_SAMPLES);
