@@ -88,13 +88,15 @@ pub(super) fn touching_pair(
             return Ok(None);
         }
     }
-    // A ball or capsule (roundings beyond the allowed depth): it is deeper
-    // exactly when its core comes closer than `r₁ + r₂ − allowed`, one
-    // sound query for the whole step, no samples. The allowed depth may be
-    // the start depth itself: the query asks for a tenth of a millimetre
-    // more, so the start is not already there (parry's `f32` depth is
-    // good to far less).
-    if roundings(moving, target) > allowed + DEEPER {
+    // A ball or capsule (roundings beyond the allowed depth) against a
+    // convex shape: it is deeper exactly when its core comes closer than
+    // `r₁ + r₂ − allowed`, one sound query for the whole step instead of
+    // samples that each run parry's EPA. The allowed depth may be the
+    // start depth itself: the query asks for a tenth of a millimetre more,
+    // so the start is not already there (parry's `f32` depth is good to far
+    // less). Against a mesh parry's samples are cheap (no EPA), and a
+    // search over the mesh for the whole step is not.
+    if is_convex(s2) && roundings(moving, target) > allowed + DEEPER {
         return stop_when_deep(moving, target, lo, hi, allowed + DEEPER, opts, report);
     }
     if let Some(c) = &contact0
