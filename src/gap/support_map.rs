@@ -8,8 +8,10 @@
 //! axes here are sound whatever direction they use; only their tightness
 //! depends on the choice.
 //!
-//! On each node the direction comes from parry's contact query at the
-//! exact poses of the node's middle time: the closest-points normal when
+//! On each node the direction comes from the shapes' closest points at the
+//! exact poses of the node's middle time (in closed form when both cores
+//! are points, segments or boxes: a capsule pair needs no GJK; parry's
+//! contact query otherwise): the closest-points normal when
 //! the shapes are apart there (the best single separating direction), the
 //! penetration normal when they overlap (no direction separates then, but
 //! the approach direction still clips the node well). As nodes shrink the
@@ -22,8 +24,9 @@
 //!    for `a`'s own support, right when `a` spins and `b` does not;
 //! 2. fixed in `b`'s frame: `n(τ) = R_b(τ)·k`, `k = R_b(mid)ᵀn`.
 //!
-//! Cost: one parry contact query (GJK, EPA when overlapping) per node plus
-//! about 70 enclosure products.
+//! Cost: one closest-points computation per node (parry's GJK, and EPA
+//! when overlapping, unless the closed form applies) plus about 70
+//! enclosure products.
 
 use super::Side;
 use super::support::{Convex, Core, ORTHO_SLACK, dot, mul, norm_up, tr_mul};
