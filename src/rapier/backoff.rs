@@ -171,8 +171,14 @@ fn core(shape: &dyn Shape) -> Option<(SharedShape, f64)> {
     (r >= 0.0 && r.is_finite()).then_some((core, r as f64))
 }
 
-/// How far the shape's points are from its frame's origin at most, metres.
+/// How far from its frame's origin the shape reaches, for bounding how far
+/// it moves when the frame turns, metres. A ball centred on its frame turns
+/// into itself (only its centre's motion moves it): 0, so a rolling ball
+/// counts as moving no more than its centre does.
 fn reach(shape: &dyn Shape) -> f64 {
+    if shape.as_ball().is_some() {
+        return 0.0;
+    }
     let b = shape.compute_local_bounding_sphere();
     b.center.length() as f64 + b.radius as f64
 }

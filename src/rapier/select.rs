@@ -67,6 +67,27 @@ pub(crate) fn thickness(shape: &dyn Shape) -> f64 {
     }
 }
 
+/// How far the body's colliders reach from its centre of mass, for how
+/// far they move when it turns, metres: rapier's `max_extent`, except that
+/// a body of balls counts only their centres (a ball turns into itself: a
+/// rolling ball moves no farther than its centre does).
+pub(crate) fn turning_extent(rb: &RigidBody, colliders: &ColliderSet) -> f64 {
+    let com = rb.local_center_of_mass();
+    let mut extent = 0.0f64;
+    for co in rb.colliders().iter().filter_map(|h| colliders.get(*h)) {
+        if !co.is_enabled() {
+            continue;
+        }
+        match (co.shape().as_ball(), co.position_wrt_parent()) {
+            (Some(_), Some(local)) => {
+                extent = extent.max((local.translation - com).length() as f64);
+            }
+            _ => return rb.mass_properties().max_extent() as f64,
+        }
+    }
+    extent
+}
+
 pub(crate) fn body_thickness(rb: &RigidBody, colliders: &ColliderSet) -> f64 {
     rb.colliders()
         .iter()
@@ -113,7 +134,7 @@ pub(crate) fn moved(
         }
         let com = rb.local_center_of_mass();
         let shift = (end * com - start.pose * com).length() as f64;
-        let extent = rb.mass_properties().max_extent() as f64;
+        let extent = turning_extent(rb, colliders);
         let spin = rb.angvel().length() as f64 * dt;
         let short = angle_short(&start.pose, &end);
         let travel = travel_bound(shift, extent, angle_bound(short, spin));

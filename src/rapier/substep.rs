@@ -127,7 +127,7 @@ pub(crate) fn predict(
         if !end.is_finite() || !accel.is_finite() {
             continue;
         }
-        let extent = rb.mass_properties().max_extent() as f64;
+        let extent = super::select::turning_extent(rb, scene.colliders);
         let shift = (end * local_com - start * local_com).length() as f64
             + 0.5 * (accel.length() as f64) * horizon * horizon;
         // An aimed body turns the short way (its velocity is last step's).
