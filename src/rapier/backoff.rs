@@ -235,6 +235,65 @@ fn at_fraction(mut toi: Toi, tau: f64) -> Toi {
     toi
 }
 
+/// Where a pair found in true contact stops.
+pub(crate) enum Stop {
+    /// At or before the contact: the earliest stop of the body's pairs.
+    Before(Toi),
+    /// After the contact (a ball or capsule `slop` deep): another pair may
+    /// still stop before it.
+    After(Toi),
+    /// Nowhere: rapier's contacts take the pair next step.
+    Contacts,
+}
+
+/// The stop of a pair found in true contact (`contact`, from the
+/// zero-skin search; `until` ends the search), by rapier's rules (see the
+/// module docs): an unrounded pair `slop` before the contact, a rounded
+/// one `slop` deep after it or not at all; a pair rapier casts to the
+/// contact at it, backed off, unless it cannot move `sink` after it (a
+/// slow landing, which rapier's contacts resolve as without CCD); at the
+/// search's conservative time when its budget ran out.
+pub(crate) fn stop_after_contact(
+    moving: &ShapeMotion,
+    target: &ShapeMotion,
+    contact: Toi,
+    until: f64,
+    rules: &HandBack,
+    opts: &QueryOptions,
+    report: &mut CcdReport,
+) -> Result<Stop, CcdError> {
+    let (s1, m1, s2, m2) = (moving.shape, &moving.motion, target.shape, &target.motion);
+    let lo = opts.time_range.lo;
+    let travel = pair_travel(s1, m1, s2, m2);
+    let stop_gap = rules.stop_gap(moving, target);
+    let hit = contact.status == RootStatus::Hit;
+    // No point of the pair moves farther than this after the contact.
+    let after = travel * (opts.time_range.hi - contact.fraction).max(0.0);
+    if hit && stop_gap <= 0.0 && after <= rules.sink {
+        return Ok(Stop::Contacts);
+    }
+    let backed = back_off(contact, travel, BACKOFF * opts.skin, lo);
+    if !hit || stop_gap == 0.0 {
+        return Ok(Stop::Before(backed));
+    }
+    if stop_gap > 0.0 {
+        // At the contact when the pair starts about that close (rapier's
+        // CCD would leave it to the contacts): the sound stand-in.
+        let before = stop_before_gap(moving, target, contact, lo, stop_gap, rules.slop);
+        return Ok(Stop::Before(before.unwrap_or(backed)));
+    }
+    let deep = stop_when_deep(
+        moving,
+        target,
+        contact.fraction,
+        until,
+        -stop_gap,
+        opts,
+        report,
+    )?;
+    Ok(deep.map_or(Stop::Contacts, Stop::After))
+}
+
 /// Bisection steps [`stop_before_gap`] takes at most (2⁻²⁴ of the step is
 /// far below the slop at any speed rapier allows).
 const BISECTIONS: usize = 24;

@@ -2,7 +2,7 @@
 //! crosses before it ([`earliest`], [`first_crossing`]).
 
 use super::backoff::{
-    BACKOFF, HandBack, back_off, pair_relative_travel, pair_travel, stop_before_gap, stop_when_deep,
+    HandBack, Stop, pair_relative_travel, pair_travel, stop_after_contact, stop_when_deep,
 };
 use super::candidates::{
     Candidate, Interaction, MeshPiece, gather, interaction, mesh_triangles, swept_aabb,
@@ -289,55 +289,27 @@ fn earliest_piece(
             }
             continue;
         }
-        let travel = pair_travel(moving.shape, &moving.motion, t.shape, &t.motion);
-        let stop_gap = rules.stop_gap(moving, t);
-        // No point of the pair moves farther than this after the
-        // contact, so it gets no deeper: rapier's contacts take it
-        // next step as they would without CCD (a slow landing).
-        let after = travel * (opts.time_range.hi - many.toi.fraction).max(0.0);
-        if after <= sink && many.toi.status == RootStatus::Hit && stop_gap <= 0.0 {
-            report.shallow_contacts += 1;
-            alive.remove(many.target);
-            continue;
-        }
-        let backed = back_off(many.toi, travel, BACKOFF * opts.skin, lo);
-        if many.toi.status != RootStatus::Hit || stop_gap == 0.0 {
-            // A budget ran out (the time is only a bound), or rapier stops
-            // the pair at its contact: stop there.
-            keep(Earliest {
-                toi: backed,
-                target: j,
-                touching: false,
-            });
-            break;
-        }
-        if stop_gap > 0.0 {
-            // Unrounded: `slop` before the contact, the earliest of all
-            // (at the contact when the pair starts about that close:
-            // rapier's CCD would leave it to the contacts; a clamp there
-            // is the sound stand-in).
-            let toi = stop_before_gap(moving, t, many.toi, lo, stop_gap, rules.slop);
-            keep(Earliest {
-                toi: toi.unwrap_or(backed),
-                target: j,
-                touching: false,
-            });
-            break;
-        }
-        // Rounded: `slop` deep after the contact, if it gets there before
-        // `until`; other pairs may still meet before that.
-        alive.remove(many.target);
-        let deep = stop_when_deep(moving, t, many.toi.fraction, until, -stop_gap, opts, report)?;
-        match deep {
-            Some(toi) => {
-                until = toi.fraction;
-                keep(Earliest {
-                    toi,
-                    target: j,
-                    touching: false,
-                });
+        let found = |toi| Earliest {
+            toi,
+            target: j,
+            touching: false,
+        };
+        match stop_after_contact(moving, t, many.toi, until, rules, opts, report)? {
+            // At or before the contact: the earliest stop of all.
+            Stop::Before(toi) => {
+                keep(found(toi));
+                break;
             }
-            None => report.shallow_contacts += 1,
+            // After it: other pairs may still meet before.
+            Stop::After(toi) => {
+                alive.remove(many.target);
+                until = toi.fraction;
+                keep(found(toi));
+            }
+            Stop::Contacts => {
+                report.shallow_contacts += 1;
+                alive.remove(many.target);
+            }
         }
     }
     Ok(best)
