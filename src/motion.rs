@@ -407,13 +407,7 @@ impl Motion {
     /// An upper bound on how far any point within `radius` metres of the
     /// frame's origin travels from its start position during the step.
     pub fn travel_bound(&self, radius: f64) -> f64 {
-        let linear = self.displacement.norm() + self.bend.norm() * 1.0;
-        // A point at distance ≤ |arm| + radius from the axis moves along a
-        // chord no longer than that distance times min(angle, 2).
-        let angle = self.rotation.norm();
-        let reach = self.arm.norm() + radius;
-        let turning = reach * angle.min(2.0);
-        (linear + turning) * (1.0 + 4.0 * f64::EPSILON) + f64::MIN_POSITIVE
+        padded(self.displacement.norm() + self.bend.norm() + self.turning_chord(radius))
     }
 
     /// An upper bound on how far any point within `radius` metres of the
@@ -422,9 +416,7 @@ impl Motion {
     /// `n`, plus the turning chord in any direction.
     pub fn travel_along(&self, n: &Vector3<f64>, radius: f64) -> f64 {
         let linear = self.displacement.dot(n).abs() + self.bend.dot(n).abs();
-        let angle = self.rotation.norm();
-        let turning = (self.arm.norm() + radius) * angle.min(2.0);
-        (linear + turning) * (1.0 + 4.0 * f64::EPSILON) + f64::MIN_POSITIVE
+        padded(linear + self.turning_chord(radius))
     }
 
     /// An upper bound on how much the distance between a point within
@@ -435,9 +427,14 @@ impl Motion {
     pub fn relative_travel_bound(&self, radius: f64, other: &Motion, other_radius: f64) -> f64 {
         let linear =
             (self.displacement - other.displacement).norm() + (self.bend - other.bend).norm();
-        let turning = (self.arm.norm() + radius) * self.rotation.norm().min(2.0)
-            + (other.arm.norm() + other_radius) * other.rotation.norm().min(2.0);
-        (linear + turning) * (1.0 + 8.0 * f64::EPSILON) + f64::MIN_POSITIVE
+        padded(linear + self.turning_chord(radius) + other.turning_chord(other_radius))
+    }
+
+    /// How far the turn alone moves a point within `radius` of the frame's
+    /// origin: it is at most `|arm| + radius` from the axis, and its chord
+    /// is at most that distance times `min(angle, 2)`.
+    fn turning_chord(&self, radius: f64) -> f64 {
+        (self.arm.norm() + radius) * self.rotation.norm().min(2.0)
     }
 
     /// The centre of mass over the node.
@@ -452,6 +449,12 @@ impl Motion {
         }
         c
     }
+}
+
+/// A bound of a few rounded operations on non-negative terms, padded up
+/// (eight ulps and the smallest normal).
+fn padded(x: f64) -> f64 {
+    x * (1.0 + 8.0 * f64::EPSILON) + f64::MIN_POSITIVE
 }
 
 /// Of the rotation vectors `axis·(angle + 2πn)` that give the same rotation
