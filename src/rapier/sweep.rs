@@ -193,27 +193,31 @@ fn earliest_piece(
     // A small prediction finds the contact of a pair within its band, or
     // within the allowed sinking (which `touching_pair` reads it for).
     let reach = widest.max(sink) + 1.0e-2;
+    // A pair rapier's contacts own, within `band` at the start.
+    let touching = |j: usize, start, band, report: &mut CcdReport| {
+        report.pairs_touching_at_start += 1;
+        let toi = touching_pair(moving, &targets[j], start, band, rules, opts, report)?;
+        Ok::<_, CcdError>(toi.map(|toi| Earliest {
+            toi,
+            target: j,
+            touching: true,
+        }))
+    };
     // A pair close at the start: a ball or capsule shallower than
     // rapier's stop gets that stop from the sound query on its cores (as
     // rapier's sweep gives it, rather than leaving it to the contacts);
-    // any other is rapier's contacts' (`touching_pair`).
+    // any other is rapier's contacts'.
     let close = |j: usize, start: (f64, Option<Contact>), report: &mut CcdReport| {
         let t = &targets[j];
         if let Some(depth) = rules.deep_stop(start.0, moving, t) {
             let toi = stop_when_deep(moving, t, lo, opts.time_range.hi, depth, opts, report)?;
-            return Ok::<_, CcdError>(toi.map(|toi| Earliest {
+            return Ok(toi.map(|toi| Earliest {
                 toi,
                 target: j,
                 touching: false,
             }));
         }
-        report.pairs_touching_at_start += 1;
-        let toi = touching_pair(moving, t, start, bands[j], rules, opts, report)?;
-        Ok(toi.map(|toi| Earliest {
-            toi,
-            target: j,
-            touching: true,
-        }))
+        touching(j, start, bands[j], report)
     };
     let mut alive: Vec<usize> = Vec::with_capacity(targets.len());
     // parry's contact costs GJK (and EPA when touching): ask it only for
@@ -225,14 +229,8 @@ fn earliest_piece(
         if contacts_only[j] {
             let start = gap_at(moving.shape, &moving.motion, t.shape, &t.motion, lo, reach)
                 .unwrap_or((reach, None));
-            report.pairs_touching_at_start += 1;
-            if let Some(toi) = touching_pair(moving, t, start, f64::INFINITY, rules, opts, report)?
-            {
-                keep(Earliest {
-                    toi,
-                    target: j,
-                    touching: true,
-                });
+            if let Some(found) = touching(j, start, f64::INFINITY, report)? {
+                keep(found);
             }
             continue;
         }

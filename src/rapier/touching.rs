@@ -76,13 +76,15 @@ pub(super) fn touching_pair(
     if travel <= allowed + gap0 {
         return Ok(None);
     }
-    if let Some(c) = &contact0
-        && is_convex(s2)
-    {
-        // The depth of a convex pair is at most its overlap along any fixed
-        // direction; along the start normal that overlap starts at `-gap0`
-        // and grows no faster than the pair travels along it. A body
-        // sliding or resting on it is done here, without a query.
+    // Against a convex target parry's depth is one least translation, so
+    // bounds along a fixed direction bound it.
+    let convex = is_convex(s2);
+    let convex_start = contact0.as_ref().filter(|_| convex);
+    if let Some(c) = convex_start {
+        // The depth is at most the overlap along the start normal, which
+        // starts at `-gap0` and grows no faster than the pair travels
+        // along it. A body sliding or resting on it is done here, without
+        // a query.
         let along = pair_travel_along(s1, m1, s2, m2, &vec_from_glam(c.normal1));
         if along <= allowed + gap0 {
             return Ok(None);
@@ -96,11 +98,10 @@ pub(super) fn touching_pair(
     // so the start is not already there (parry's `f32` depth is good to far
     // less). Against a mesh parry's samples are cheap (no EPA), and a
     // search over the mesh for the whole step is not.
-    if is_convex(s2) && roundings(moving, target) > allowed + DEEPER {
+    if convex && roundings(moving, target) > allowed + DEEPER {
         return stop_when_deep(moving, target, lo, hi, allowed + DEEPER, opts, report);
     }
-    if let Some(c) = &contact0
-        && is_convex(s2)
+    if let Some(c) = convex_start
         && proved_within(moving, target, c, allowed, opts, report)
     {
         return Ok(None);
