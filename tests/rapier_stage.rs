@@ -34,9 +34,10 @@ impl Run {
         }
     }
 
-    fn fixed(&mut self, collider: impl Into<Collider>, at: Vector) {
+    fn fixed(&mut self, collider: impl Into<Collider>, at: Vector) -> ColliderHandle {
         self.world
-            .insert(RigidBodyBuilder::fixed().translation(at), collider);
+            .insert(RigidBodyBuilder::fixed().translation(at), collider)
+            .1
     }
 
     fn dynamic(
@@ -52,17 +53,27 @@ impl Run {
     }
 }
 
-/// A 0.1 m thick fixed wall at x = 0 and one projectile fired at it at
-/// 200 m/s from x = −5; the largest x its centre reached at a step end.
-fn fire_at_wall(ccd: Ccd, collider: ColliderBuilder) -> f32 {
+/// A 0.1 m thick fixed wall at x = 0 and one projectile to be fired at it
+/// at 200 m/s from x = −5: the world, the projectile, the wall.
+fn projectile_and_wall(
+    ccd: Ccd,
+    collider: ColliderBuilder,
+) -> (Run, RigidBodyHandle, ColliderHandle) {
     let mut run = Run::new(ccd, Vector::ZERO);
-    run.fixed(ColliderBuilder::cuboid(0.05, 2.0, 2.0), Vector::ZERO);
+    let wall = run.fixed(ColliderBuilder::cuboid(0.05, 2.0, 2.0), Vector::ZERO);
     let h = run.dynamic(
         RigidBodyBuilder::dynamic()
             .translation(Vector::new(-5.0, 0.0, 0.0))
             .linvel(Vector::new(200.0, 0.0, 0.0)),
         collider,
     );
+    (run, h, wall)
+}
+
+/// The projectile fired at the wall; the largest x its centre reached at a
+/// step end.
+fn fire_at_wall(ccd: Ccd, collider: ColliderBuilder) -> f32 {
+    let (mut run, h, _) = projectile_and_wall(ccd, collider);
     let mut max_x = f32::MIN;
     for _ in 0..STEPS {
         run.step();
@@ -128,20 +139,7 @@ fn a_compound_of_cylinders_at_200_m_s_stops_at_a_thin_wall() {
 /// at the thin wall and the wall, at the end of the step its CCD stopped it
 /// (the first step that ends within 2 cm of the wall).
 fn gap_at_stop(ccd: Ccd, collider: ColliderBuilder) -> f32 {
-    let mut run = Run::new(ccd, Vector::ZERO);
-    let wall = run
-        .world
-        .insert(
-            RigidBodyBuilder::fixed(),
-            ColliderBuilder::cuboid(0.05, 2.0, 2.0),
-        )
-        .1;
-    let h = run.dynamic(
-        RigidBodyBuilder::dynamic()
-            .translation(Vector::new(-5.0, 0.0, 0.0))
-            .linvel(Vector::new(200.0, 0.0, 0.0)),
-        collider,
-    );
+    let (mut run, h, wall) = projectile_and_wall(ccd, collider);
     let moving = run.world.bodies[h].colliders()[0];
     for _ in 0..STEPS {
         run.step();
