@@ -23,10 +23,11 @@ use bevy::prelude::*;
 use bevy_rapier3d::plugin::context::SimulationToRenderTime;
 use bevy_rapier3d::prelude::*;
 use bevy_rapier3d::rapier::prelude::{
-    ColliderHandle, ColliderSet, CollisionEvent as RapierCollisionEvent,
+    BroadPhaseBvh, ColliderHandle, ColliderSet, CollisionEvent as RapierCollisionEvent,
     ContactForceEvent as RapierContactForceEvent, ContactModificationContext, ContactPair,
-    EventHandler, IntegrationParameters, PairFilterContext, PhysicsHooks, Real, RigidBodySet,
-    SoftBodySet, SoftBodyTearEvent as RapierTearEvent, SolverFlags,
+    EventHandler, IntegrationParameters, IslandManager, NarrowPhase, PairFilterContext,
+    PhysicsHooks, PhysicsPipeline, Real, RigidBodySet, SoftBodySet,
+    SoftBodyTearEvent as RapierTearEvent, SolverFlags,
 };
 use std::collections::HashMap;
 use std::sync::Mutex;
@@ -183,23 +184,37 @@ impl Context<'_> {
             collisions: Mutex::new(std::mem::take(&mut events.0)),
             forces: Mutex::new(std::mem::take(&mut events.1)),
         };
-        if sim.event_handler().is_none() {
+        // The step itself, with the context's parts it mutates handed in.
+        let mut step = |pipeline: &mut PhysicsPipeline,
+                        islands: &mut IslandManager,
+                        broad_phase: &mut BroadPhaseBvh,
+                        narrow_phase: &mut NarrowPhase,
+                        events: &dyn EventHandler| {
             let report = stage.stage.step_pipeline(
-                &mut sim.pipeline,
+                pipeline,
                 gravity,
                 params,
-                &mut sim.islands,
-                &mut sim.broad_phase,
-                &mut sim.narrow_phase,
+                islands,
+                broad_phase,
+                narrow_phase,
                 &mut self.bodies.bodies,
                 &mut self.colliders.colliders,
                 &mut self.joints.impulse_joints,
                 &mut self.joints.multibody_joints,
                 &mut self.bodies.soft_bodies,
                 hooks,
-                &handler,
+                events,
             );
             stage.reports.push(report.clone());
+        };
+        if sim.event_handler().is_none() {
+            step(
+                &mut sim.pipeline,
+                &mut sim.islands,
+                &mut sim.broad_phase,
+                &mut sim.narrow_phase,
+                &handler,
+            );
         } else {
             // The user's handler is reachable only through `&self` of the
             // whole context: the parts the step mutates are moved out for
@@ -214,22 +229,13 @@ impl Context<'_> {
                 collisions: Mutex::new(take_queue(&handler.collisions)),
                 forces: Mutex::new(take_queue(&handler.forces)),
             };
-            let report = stage.stage.step_pipeline(
+            step(
                 &mut pipeline,
-                gravity,
-                params,
                 &mut islands,
                 &mut broad_phase,
                 &mut narrow_phase,
-                &mut self.bodies.bodies,
-                &mut self.colliders.colliders,
-                &mut self.joints.impulse_joints,
-                &mut self.joints.multibody_joints,
-                &mut self.bodies.soft_bodies,
-                hooks,
                 &with_user,
             );
-            stage.reports.push(report.clone());
             *handler.collisions.lock().unwrap_or_else(|e| e.into_inner()) =
                 with_user.collisions.into_inner().unwrap_or_default();
             *handler.forces.lock().unwrap_or_else(|e| e.into_inner()) =
