@@ -20,7 +20,7 @@
 //! motion so defined. [`Motion::pose_at`] evaluates the same definition in
 //! plain `f64` for ground truth and for the pose reported at an impact.
 
-use crate::enclosure::rounding::up;
+use crate::enclosure::rounding::{bound, up};
 use crate::enclosure::series;
 use crate::enclosure::{Enclosure, Interval, TimeSpan};
 use crate::error::{CcdError, check_finite};
@@ -99,9 +99,9 @@ pub trait Trajectory {
 /// formula gives the frame's rotation and the turned arm from the centre as
 /// `R(τ) = R0 + sin φ·(K·R0) + (1 − cos φ)·(K²·R0)` and
 /// `arm(τ) = arm + sin φ·(K·arm) + (1 − cos φ)·(K²·arm)`, `φ = |θ|·τ`. The
-/// products are computed once in interval arithmetic and kept as `f64`
-/// values plus one error radius per group, so that each node costs two
-/// multiplications of an enclosure by a number per entry.
+/// products are computed once and kept as `f64` values plus one error
+/// radius per group, so that each node costs two multiplications of an
+/// enclosure by a number per entry.
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct Spin {
     angle: f64,
@@ -129,43 +129,48 @@ impl Spin {
         if theta.norm() <= Spin::NEGLIGIBLE {
             return None;
         }
-        let t = theta.map(Interval::point);
-        let angle = (t.x.sqr() + t.y.sqr() + t.z.sqr()).sqrt().ok()?;
-        let inv = angle.recip().ok()?;
-        let k = t.map(|x| x * inv);
-        let zero = Interval::point(0.0);
-        let skew = Matrix3::new(zero, -k.z, k.y, k.z, zero, -k.x, -k.y, k.x, zero);
-        let k2 = Matrix3::from_fn(|i, j| {
-            let kk = k[i] * k[j];
-            if i == j {
-                kk - Interval::point(1.0)
-            } else {
-                kk
-            }
-        });
-        // Products written out: nalgebra's generic ones cost several times
-        // more in interval arithmetic (they multiply by α = 1 and β = 0).
-        let times = |m: &Matrix3<Interval>, r: &Matrix3<f64>| {
-            Matrix3::from_fn(|i, j| {
-                m[(i, 0)] * r[(0, j)] + m[(i, 1)] * r[(1, j)] + m[(i, 2)] * r[(2, j)]
-            })
-        };
-        let apply = |m: &Matrix3<Interval>, v: &Vector3<f64>| {
-            Vector3::from_fn(|i, _| m[(i, 0)] * v.x + m[(i, 1)] * v.y + m[(i, 2)] * v.z)
-        };
-        let (rot_k, rot_k2) = (times(&skew, start), times(&k2, start));
-        let (arm_k, arm_k2) = (apply(&skew, arm), apply(&k2, arm));
-        let widest = |m: &[Interval]| m.iter().map(radius).fold(0.0, f64::max);
+        let (angle, k) = Spin::unit_axis(theta)?;
+        // The products `K·R0`, `K²·R0`, `K·arm`, `K²·arm` in plain `f64`
+        // from the axis' midpoints, with one error bound per group: interval
+        // products cost several times more, and every collider motion of a
+        // step is built here (most are never searched). With `w` the widest
+        // axis entry and `S` a column's absolute sum, an entry of
+        // `K·x` is off by at most `(w + γ₂)·S` and one of
+        // `K²·x = k·(k·x) − x` by at most `(2w + 6u)·S` to first order
+        // (`u = 2⁻⁵³`, `γₙ ≈ n·u`); `(4w + 16u)·S` covers both with room
+        // for the second-order terms.
+        let w = k.iter().map(|iv| iv.width()).fold(0.0, f64::max);
+        let kmid = k.map(|iv| iv.mid());
+        let rate = 4.0 * w + 16.0 * (0.5 * f64::EPSILON);
+        let skew = |x: &Vector3<f64>| kmid.cross(x);
+        let square = |x: &Vector3<f64>| kmid * kmid.dot(x) - x;
+        let mut rot_k = Matrix3::zeros();
+        let mut rot_k2 = Matrix3::zeros();
+        let mut widest_column = 0.0f64;
+        for j in 0..3 {
+            let column = start.column(j).into_owned();
+            rot_k.set_column(j, &skew(&column));
+            rot_k2.set_column(j, &square(&column));
+            widest_column = widest_column.max(column.abs().sum());
+        }
         Some(Spin {
             angle: angle.mid(),
             angle_err: radius(&angle),
-            rot_err: widest(rot_k.as_slice()).max(widest(rot_k2.as_slice())),
-            rot_k: rot_k.map(|iv| iv.mid()),
-            rot_k2: rot_k2.map(|iv| iv.mid()),
-            arm_err: widest(arm_k.as_slice()).max(widest(arm_k2.as_slice())),
-            arm_k: arm_k.map(|iv| iv.mid()),
-            arm_k2: arm_k2.map(|iv| iv.mid()),
+            rot_k,
+            rot_k2,
+            rot_err: bound(rate * widest_column),
+            arm_k: skew(arm),
+            arm_k2: square(arm),
+            arm_err: bound(rate * arm.abs().sum()),
         })
+    }
+
+    /// `|θ|` and the unit axis `θ/|θ|`, enclosed.
+    fn unit_axis(theta: &Vector3<f64>) -> Option<(Interval, Vector3<Interval>)> {
+        let t = theta.map(Interval::point);
+        let angle = (t.x.sqr() + t.y.sqr() + t.z.sqr()).sqrt().ok()?;
+        let inv = angle.recip().ok()?;
+        Some((angle, t.map(|x| x * inv)))
     }
 
     /// `(sin φ, 1 − cos φ)` over the node, and the sum of their largest
@@ -512,5 +517,91 @@ impl Trajectory for Motion {
         let center = self.center.coords + self.displacement * tau + self.bend * (tau * tau);
         let origin = center + turn * self.arm;
         Isometry3::from_parts(Translation3::from(origin), turn * self.start_rotation)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    /// The prepared products in interval arithmetic (they enclose the
+    /// exact ones), entry by entry: the reference the `f64` bounds must
+    /// hold.
+    fn interval_products(
+        theta: &Vector3<f64>,
+        start: &Matrix3<f64>,
+        arm: &Vector3<f64>,
+    ) -> (
+        Matrix3<Interval>,
+        Matrix3<Interval>,
+        Vector3<Interval>,
+        Vector3<Interval>,
+    ) {
+        let (_, k) = Spin::unit_axis(theta).expect("non-zero axis");
+        let zero = Interval::point(0.0);
+        let skew = Matrix3::new(zero, -k.z, k.y, k.z, zero, -k.x, -k.y, k.x, zero);
+        let k2 = Matrix3::from_fn(|i, j| {
+            let kk = k[i] * k[j];
+            if i == j {
+                kk - Interval::point(1.0)
+            } else {
+                kk
+            }
+        });
+        let times = |m: &Matrix3<Interval>, r: &Matrix3<f64>| {
+            Matrix3::from_fn(|i, j| {
+                m[(i, 0)] * r[(0, j)] + m[(i, 1)] * r[(1, j)] + m[(i, 2)] * r[(2, j)]
+            })
+        };
+        let apply = |m: &Matrix3<Interval>, v: &Vector3<f64>| {
+            Vector3::from_fn(|i, _| m[(i, 0)] * v.x + m[(i, 1)] * v.y + m[(i, 2)] * v.z)
+        };
+        (
+            times(&skew, start),
+            times(&k2, start),
+            apply(&skew, arm),
+            apply(&k2, arm),
+        )
+    }
+
+    fn holds(mid: f64, err: f64, iv: &Interval) -> bool {
+        mid - err <= iv.lo && iv.hi <= mid + err
+    }
+
+    proptest! {
+        /// Every exact product lies in its interval enclosure, so an `f64`
+        /// bound that holds the whole interval holds the exact value.
+        #[test]
+        fn prepared_products_hold_the_interval_ones(
+            theta in prop::array::uniform3(-300.0f64..300.0),
+            scale in -12i32..3,
+            axis in prop::array::uniform3(-1.0f64..1.0),
+            angle in -7.0f64..7.0,
+            arm in prop::array::uniform3(-50.0f64..50.0),
+        ) {
+            let theta = Vector3::from(theta) * 10f64.powi(scale);
+            prop_assume!(theta.norm() > 1.0e-100);
+            let axis = Vector3::from(axis);
+            prop_assume!(axis.norm() > 1.0e-3);
+            let start = *UnitQuaternion::from_scaled_axis(axis.normalize() * angle)
+                .to_rotation_matrix()
+                .matrix();
+            let arm = Vector3::from(arm);
+            let spin = Spin::new(&theta, &start, &arm).expect("turning");
+            let (rk, rk2, ak, ak2) = interval_products(&theta, &start, &arm);
+            for (mid, iv) in spin.rot_k.iter().zip(rk.iter()) {
+                prop_assert!(holds(*mid, spin.rot_err, iv), "K·R0 {mid} ± {} vs {iv:?}", spin.rot_err);
+            }
+            for (mid, iv) in spin.rot_k2.iter().zip(rk2.iter()) {
+                prop_assert!(holds(*mid, spin.rot_err, iv), "K²·R0 {mid} ± {} vs {iv:?}", spin.rot_err);
+            }
+            for (mid, iv) in spin.arm_k.iter().zip(ak.iter()) {
+                prop_assert!(holds(*mid, spin.arm_err, iv), "K·arm {mid} ± {} vs {iv:?}", spin.arm_err);
+            }
+            for (mid, iv) in spin.arm_k2.iter().zip(ak2.iter()) {
+                prop_assert!(holds(*mid, spin.arm_err, iv), "K²·arm {mid} ± {} vs {iv:?}", spin.arm_err);
+            }
+        }
     }
 }
