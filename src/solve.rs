@@ -246,10 +246,22 @@ impl Solver {
             });
         }
         let (start, end) = (0, self.arena.len());
+        let root = Frame { span, start, end };
+        // The whole span first: most searches end here, every pair apart
+        // over it (so at its start too), with no evaluation at the start.
+        self.ignored.clear();
+        let Some(root_node) = self.visit(gaps, root, &mut stats) else {
+            return Ok(SolveOutcome {
+                status: RootStatus::Separated,
+                time: span.hi,
+                pair: None,
+                stats,
+            });
+        };
         // Pairs touching at the very start: the answer, or left out.
         let at_start = TimeSpan::new(span.lo, span.lo);
         let ignore = options.initial_contact == InitialContact::Ignore;
-        self.touching_at_start(gaps, at_start, ignore, &mut stats);
+        self.touching_at_start(gaps, at_start, (start, end), ignore, &mut stats);
         if !ignore && let Some(&pair) = self.ignored.first() {
             return Ok(SolveOutcome {
                 status: RootStatus::InitiallyTouching,
@@ -258,19 +270,34 @@ impl Solver {
                 stats,
             });
         }
-        self.stack.push(Frame { span, start, end });
-        while let Some(frame) = self.stack.pop() {
-            self.arena.truncate(frame.end);
-            if stats.pair_evaluations >= options.max_evaluations {
-                return Ok(SolveOutcome {
-                    status: RootStatus::BudgetExhausted,
-                    time: frame.span.lo,
-                    pair: self.arena.get(frame.start).map(|a| a.pair as usize),
-                    stats,
-                });
-            }
-            let Some(node) = self.visit(gaps, frame, &mut stats) else {
-                continue; // every pair apart on this node
+        // The root's visit holds unless it saw pairs now left out.
+        let mut first = if self.ignored.is_empty() {
+            Some((root, root_node))
+        } else {
+            self.stack.push(root);
+            None
+        };
+        loop {
+            let (frame, node) = match first.take() {
+                Some(reused) => reused,
+                None => {
+                    let Some(frame) = self.stack.pop() else {
+                        break;
+                    };
+                    self.arena.truncate(frame.end);
+                    if stats.pair_evaluations >= options.max_evaluations {
+                        return Ok(SolveOutcome {
+                            status: RootStatus::BudgetExhausted,
+                            time: frame.span.lo,
+                            pair: self.arena.get(frame.start).map(|a| a.pair as usize),
+                            stats,
+                        });
+                    }
+                    let Some(node) = self.visit(gaps, frame, &mut stats) else {
+                        continue; // every pair apart on this node
+                    };
+                    (frame, node)
+                }
             };
             let clipped = node.span;
             // Report only a node that was itself evaluated at width ≤ ε, and
@@ -391,6 +418,7 @@ impl Solver {
         &mut self,
         gaps: &mut G,
         span: TimeSpan,
+        (start, end): (usize, usize),
         all: bool,
         stats: &mut SolveStats,
     ) {
@@ -399,7 +427,7 @@ impl Solver {
         stats.nodes += 1;
         self.ignored.clear();
         self.pending.clear();
-        self.pending.extend_from_slice(&self.arena);
+        self.pending.extend_from_slice(&self.arena[start..end]);
         while let Some(item) = self.pending.pop() {
             let pair = item.pair as usize;
             gaps.eval(pair, span, item.axes, &mut out);
