@@ -21,7 +21,6 @@
 //! plain `f64` for ground truth and for the pose reported at an impact.
 
 use crate::enclosure::rounding::{bound, up};
-use crate::enclosure::series;
 use crate::enclosure::{Enclosure, Interval, TimeSpan};
 use crate::error::{CcdError, check_finite};
 use nalgebra::{Isometry3, Matrix3, Point3, Translation3, UnitQuaternion, Vector3};
@@ -177,7 +176,7 @@ impl Spin {
     /// magnitudes (which scales the prepared products' error radii).
     fn angle_terms<E: Enclosure>(&self, tau: E) -> (E, E, f64) {
         let phi = (tau * self.angle).widen(up(self.angle_err * tau.range().mag()));
-        let (s, cos) = series::sin_cos(phi);
+        let (s, cos) = phi.sin_cos();
         let c = E::one() - cos;
         let mag = up(s.range().mag() + c.range().mag());
         (s, c, mag)

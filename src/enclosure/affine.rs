@@ -7,7 +7,7 @@
 //! cross products with the operands are accounted for in full, so the form
 //! is sound and its excess width falls with the square of the node width.
 
-use super::rounding::{bound, down, up};
+use super::rounding::{LIBM_SLACK, bound, down, up};
 use super::{Arithmetic, Enclosure, Interval, TimeSpan, series};
 use crate::CcdError;
 use std::ops::{Add, AddAssign, Mul, MulAssign, Neg, Sub, SubAssign};
@@ -239,11 +239,38 @@ impl Enclosure for Affine {
     }
 
     fn sin(self) -> Affine {
-        series::trig(self, false)
+        self.sin_cos().0
     }
 
     fn cos(self) -> Affine {
-        series::trig(self, true)
+        self.sin_cos().1
+    }
+
+    /// The degree-one series about the centre, written out: the generic one
+    /// (`series::sin_cos`) builds its coefficients as intervals, and this is
+    /// the rotation series' inner step (a fifth of a turning pair's
+    /// evaluation). With `δ = s·e ± r`, `sin(c + δ) = sin c + cos c·δ −
+    /// sin ξ·δ²/2`: centre `sin c`, slope `cos c·s`, and in the error term
+    /// `|cos c|·r`, `(|s| + r)²/2`, libm's error (on the centre and, times
+    /// `|s|`, on the slope) and the slope's rounding. Likewise for `cos`.
+    fn sin_cos(self) -> (Affine, Affine) {
+        let reach = self.s.abs() + self.r;
+        if !(reach <= 4.0) {
+            // Beyond about a turn (or unbounded): the generic answer, `[−1, 1]`.
+            return series::sin_cos(self);
+        }
+        let (sc, cc) = self.c.sin_cos();
+        let common = 0.5 * (reach * reach) + LIBM_SLACK * (1.0 + self.s.abs());
+        let sin_slope = cc * self.s;
+        let cos_slope = -(sc * self.s);
+        let sin_r =
+            (cc.abs() + LIBM_SLACK).min(1.0) * self.r + common + sin_slope.abs() * f64::EPSILON;
+        let cos_r =
+            (sc.abs() + LIBM_SLACK).min(1.0) * self.r + common + cos_slope.abs() * f64::EPSILON;
+        (
+            series::clamp_unit(Affine::checked(sc, sin_slope, bound(sin_r))),
+            series::clamp_unit(Affine::checked(cc, cos_slope, bound(cos_r))),
+        )
     }
 
     fn restrict(self, from: TimeSpan, to: TimeSpan) -> Affine {

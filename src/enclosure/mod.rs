@@ -223,6 +223,11 @@ pub trait Enclosure:
     /// `cos x`, valid for any argument range.
     fn cos(self) -> Self;
 
+    /// `(sin x, cos x)` together, sharing their expansion point.
+    fn sin_cos(self) -> (Self, Self) {
+        series::sin_cos(self)
+    }
+
     /// The same function restricted to the sub-node `to` of the node `from`
     /// it was computed on (`to ⊆ from`): its local symbol becomes `to`'s.
     /// Intervals do not depend on the symbol and come back unchanged.

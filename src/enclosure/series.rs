@@ -121,7 +121,7 @@ pub(crate) fn trig<E: Enclosure>(x: E, cosine: bool) -> E {
 
 /// A sine or cosine enclosure, or `[−1, 1]`'s part of its range when the
 /// series overshoots that much.
-fn clamp_unit<E: Enclosure>(series: E) -> E {
+pub(crate) fn clamp_unit<E: Enclosure>(series: E) -> E {
     let range = series.range();
     if range.lo < -1.0 || range.hi > 1.0 {
         let bounded = Interval::new(range.lo.max(-1.0), range.hi.min(1.0));
