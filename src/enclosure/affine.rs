@@ -255,7 +255,7 @@ impl Enclosure for Affine {
     /// `|s|`, on the slope) and the slope's rounding. Likewise for `cos`.
     fn sin_cos(self) -> (Affine, Affine) {
         let reach = self.s.abs() + self.r;
-        if !(reach <= 4.0) {
+        if reach.is_nan() || reach > 4.0 {
             // Beyond about a turn (or unbounded): the generic answer, `[−1, 1]`.
             return series::sin_cos(self);
         }
