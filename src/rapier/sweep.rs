@@ -4,9 +4,7 @@
 use super::backoff::{
     HandBack, Stop, pair_relative_travel, pair_travel, stop_after_contact, stop_when_deep,
 };
-use super::candidates::{
-    Candidate, Interaction, MeshPiece, gather, interaction, mesh_triangles, swept_aabb,
-};
+use super::candidates::{Candidate, Interaction, MeshPiece, gather, interaction, mesh_triangles};
 use super::moved::Moved;
 use super::report::CcdReport;
 use super::search;
@@ -373,8 +371,7 @@ pub(crate) fn sweep_body(
         let Some(co1) = scene.colliders.get(h1).filter(|c| c.is_enabled()) else {
             continue;
         };
-        let motion1 = ws.motions.get(motions, h1, co1, scene.bodies)?;
-        let swept = swept_aabb(co1.shape(), &motion1);
+        let (motion1, swept) = ws.motions.get_swept(motions, h1, co1, scene.bodies)?;
         let mut failure = None;
         let cache = &mut ws.motions;
         gather(
@@ -385,8 +382,8 @@ pub(crate) fn sweep_body(
             h1,
             co1,
             &swept,
-            |h2, co2| match cache.get(motions, h2, co2, scene.bodies) {
-                Ok(m) => Some(swept_aabb(co2.shape(), &m)),
+            |h2, co2| match cache.get_swept(motions, h2, co2, scene.bodies) {
+                Ok((_, swept)) => Some(swept),
                 Err(e) => {
                     failure = Some(e);
                     None

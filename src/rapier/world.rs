@@ -3,11 +3,13 @@
 //! ([`StepMotions`]).
 
 use super::backoff::HandBack;
+use super::candidates::swept_aabb;
 use super::config::CcdConfig;
 use super::moved::Moved;
 use crate::convert::{iso_from_pose, point_from_glam, vec_from_glam};
 use crate::error::CcdError;
 use crate::motion::Motion;
+use rapier3d::parry::bounding_volume::Aabb;
 use rapier3d::prelude::{
     Collider, ColliderHandle, ColliderSet, ImpulseJointSet, PhysicsHooks, Pose, RigidBodyHandle,
     RigidBodySet, Vector,
@@ -36,14 +38,20 @@ impl StageWorld<'_> {
     }
 }
 
-/// Collider motions built this step, each with what it was built from:
-/// `Motion::from_poses` prepares the bounds of the rotation series (about a
-/// microsecond of interval products), and a step asks for the same
-/// motions in every round and every push. A body whose motion a round cut
+/// Collider motions built this step, each with what it was built from
+/// and, once asked for, its swept box: a step asks for the same motions
+/// and boxes in every round and every push (the box of a moving candidate
+/// takes two parry boxes and two poses). A body whose motion a round cut
 /// gets a new one. Clear it between steps.
 #[derive(Default)]
 pub(crate) struct MotionCache {
-    built: HashMap<ColliderHandle, (Option<Stamp>, Motion)>,
+    built: HashMap<ColliderHandle, Built>,
+}
+
+struct Built {
+    stamp: Option<Stamp>,
+    motion: Motion,
+    swept: Option<Aabb>,
 }
 
 /// What a collider's motion is built from: its body's two poses, turn hint
@@ -72,6 +80,33 @@ impl MotionCache {
         co: &Collider,
         bodies: &RigidBodySet,
     ) -> Result<Motion, CcdError> {
+        Ok(self.entry(motions, handle, co, bodies)?.motion)
+    }
+
+    /// The motion of collider `handle` and the box it sweeps
+    /// (`candidates::swept_aabb`), each built once per body motion.
+    pub fn get_swept(
+        &mut self,
+        motions: &StepMotions,
+        handle: ColliderHandle,
+        co: &Collider,
+        bodies: &RigidBodySet,
+    ) -> Result<(Motion, Aabb), CcdError> {
+        let built = self.entry(motions, handle, co, bodies)?;
+        let motion = built.motion;
+        let swept = *built
+            .swept
+            .get_or_insert_with(|| swept_aabb(co.shape(), &motion));
+        Ok((motion, swept))
+    }
+
+    fn entry(
+        &mut self,
+        motions: &StepMotions,
+        handle: ColliderHandle,
+        co: &Collider,
+        bodies: &RigidBodySet,
+    ) -> Result<&mut Built, CcdError> {
         let stamp = co.parent().and_then(|h| motions.body(h)).map(|m| Stamp {
             start: m.start,
             end: m.end,
@@ -79,14 +114,19 @@ impl MotionCache {
             accel: m.accel,
             dt: motions.dt,
         });
-        if let Some((built, motion)) = self.built.get(&handle)
-            && *built == stamp
-        {
-            return Ok(*motion);
+        let stale = self.built.get(&handle).is_none_or(|b| b.stamp != stamp);
+        if stale {
+            let motion = motions.collider(co, bodies)?;
+            self.built.insert(
+                handle,
+                Built {
+                    stamp,
+                    motion,
+                    swept: None,
+                },
+            );
         }
-        let motion = motions.collider(co, bodies)?;
-        self.built.insert(handle, (stamp, motion));
-        Ok(motion)
+        Ok(self.built.get_mut(&handle).expect("just built"))
     }
 }
 
