@@ -30,6 +30,8 @@ pub(crate) struct CuboidTriangle {
     /// triangle's own coordinates (rotation keeps them), rounded up.
     edge_len: [f64; 3],
     normal_len: f64,
+    /// `(c1 − c0) × (c2 − c0)` in the triangle's frame.
+    normal: Vector3<f64>,
 }
 
 impl CuboidTriangle {
@@ -46,6 +48,7 @@ impl CuboidTriangle {
             pad: up(ORTHO_SLACK * up(reach + 1.0)),
             edge_len,
             normal_len: up(up(normal.norm()) * (1.0 + 1e-12)),
+            normal,
         }
     }
 
@@ -72,14 +75,24 @@ impl CuboidTriangle {
             }
         }
         let f = [v[1] - v[0], v[2] - v[1], v[0] - v[2]];
+        // The triangle's normal, turned from its own frame (tighter than
+        // the cross product of two enclosed edges, and shared by the edge
+        // axes below).
+        let n = rel.rotate(&self.normal);
         if axes >> 3 & 1 != 0 {
-            let n = (v[1] - v[0]).cross(&(v[2] - v[0]));
             let reach = n.x.abs() * h.x + n.y.abs() * h.y + n.z.abs() * h.z;
             let d = n.dot(&v[0]);
             out[3] = d.abs() - reach - up(self.pad * self.normal_len);
         }
+        let zero = E::zero();
         for k in 0..3 {
             let (k1, k2) = ((k + 1) % 3, (k + 2) % 3);
+            // Along `L = e_k × f_j` edge `j`'s two corners project alike and
+            // the third corner `n_k` further: `L·(v_{j+2} − v_j) =
+            // e_k·(f_j × (v_{j+2} − v_j)) = e_k·n`. One projection per axis
+            // instead of three (the identity holds for a rotation; the
+            // start matrices' distance from one is within `pad`).
+            let (nk_lo, nk_hi) = (n[k].min(zero), n[k].max(zero));
             for (j, fj) in f.iter().enumerate() {
                 let axis = 4 + 3 * k + j;
                 if axes >> axis & 1 == 0 {
@@ -87,9 +100,10 @@ impl CuboidTriangle {
                 }
                 // L = e_k × f_j: component k is 0, k1 is −f[k2], k2 is f[k1].
                 let (l1, l2) = (-fj[k2], fj[k1]);
-                let p = v.map(|vi| l1 * vi[k1] + l2 * vi[k2]);
+                let p = l1 * v[j][k1] + l2 * v[j][k2];
                 let reach = l1.abs() * h[k1] + l2.abs() * h[k2];
-                out[axis] = gap(p, reach, up(self.pad * self.edge_len[j]));
+                let (lo, hi) = (p + nk_lo, p + nk_hi);
+                out[axis] = (lo - reach).max(-hi - reach) - up(self.pad * self.edge_len[j]);
             }
         }
     }
