@@ -414,15 +414,6 @@ impl Motion {
         padded(self.displacement.norm() + self.bend.norm() + self.turning_chord(radius))
     }
 
-    /// An upper bound on how far any point within `radius` metres of the
-    /// frame's origin travels along the unit direction `n` (either way)
-    /// from its start position during the step: the centre's motion along
-    /// `n`, plus the turning chord in any direction.
-    pub fn travel_along(&self, n: &Vector3<f64>, radius: f64) -> f64 {
-        let linear = self.displacement.dot(n).abs() + self.bend.dot(n).abs();
-        padded(linear + self.turning_chord(radius))
-    }
-
     /// An upper bound on how much the distance between a point within
     /// `radius` of this frame's origin and a point within `other_radius`
     /// of `other`'s changes during the step: their centres' relative
@@ -431,6 +422,21 @@ impl Motion {
     pub fn relative_travel_bound(&self, radius: f64, other: &Motion, other_radius: f64) -> f64 {
         let linear =
             (self.displacement - other.displacement).norm() + (self.bend - other.bend).norm();
+        padded(linear + self.turning_chord(radius) + other.turning_chord(other_radius))
+    }
+
+    /// [`Motion::relative_travel_bound`] along the unit direction `n`
+    /// only: a bound on how much `n·(p − q)` changes, the centres'
+    /// relative motion along `n` plus both turning chords.
+    pub fn relative_travel_along(
+        &self,
+        n: &Vector3<f64>,
+        radius: f64,
+        other: &Motion,
+        other_radius: f64,
+    ) -> f64 {
+        let linear = (self.displacement - other.displacement).dot(n).abs()
+            + (self.bend - other.bend).dot(n).abs();
         padded(linear + self.turning_chord(radius) + other.turning_chord(other_radius))
     }
 

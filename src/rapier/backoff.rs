@@ -201,8 +201,9 @@ pub(crate) fn pair_relative_travel(
     m1.relative_travel_bound(reach(s1), m2, reach(s2))
 }
 
-/// Bound on how far the pair's points move relative to each other along
-/// the unit direction `n` over the whole step, metres.
+/// Bound on how much `n·(p − q)` changes over the whole step for any
+/// point `p` of one shape and `q` of the other, metres (their relative
+/// motion along the unit direction `n`).
 pub(crate) fn pair_travel_along(
     s1: &dyn Shape,
     m1: &Motion,
@@ -210,7 +211,7 @@ pub(crate) fn pair_travel_along(
     m2: &Motion,
     n: &Vector3<f64>,
 ) -> f64 {
-    m1.travel_along(n, reach(s1)) + m2.travel_along(n, reach(s2))
+    m1.relative_travel_along(n, reach(s1), m2, reach(s2))
 }
 
 /// A hit at the true contact moved back along the motion by `back` metres

@@ -4,8 +4,8 @@
 //! can be, sampled with parry's contact otherwise (see [`touching_pair`]).
 
 use super::backoff::{
-    BACKOFF, HandBack, back_off, pair_travel, pair_travel_along, roundings, stop_before_gap,
-    stop_when_deep,
+    BACKOFF, HandBack, back_off, pair_relative_travel, pair_travel, pair_travel_along, roundings,
+    stop_before_gap, stop_when_deep,
 };
 use super::report::CcdReport;
 use super::search;
@@ -72,8 +72,12 @@ pub(super) fn touching_pair(
     let lo = opts.time_range.lo;
     let hi = opts.time_range.hi;
     let travel = pair_travel(s1, m1, s2, m2);
-    // No point moves far enough to get deeper than allowed: nothing to do.
-    if travel <= allowed + gap0 {
+    // The pair's points move too little relative to each other to get
+    // deeper than allowed: nothing to do. (parry's depth of a convex pair,
+    // or of each convex part of a composite one, is the distance of the
+    // origin from the border of their Minkowski difference, whose points
+    // `p − q` move no farther than this.)
+    if pair_relative_travel(s1, m1, s2, m2) <= allowed + gap0 {
         return Ok(None);
     }
     // Against a convex target parry's depth is one least translation, so
