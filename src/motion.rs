@@ -186,14 +186,18 @@ impl Spin {
     fn rotation<E: Enclosure>(&self, start: &Matrix3<f64>, s: E, c: E, mag: f64) -> Matrix3<E> {
         let slack = up(self.rot_err * mag);
         Matrix3::from_fn(|i, j| {
-            (s * self.rot_k[(i, j)] + c * self.rot_k2[(i, j)] + start[(i, j)]).widen(slack)
+            s.scaled_sum(self.rot_k[(i, j)], c, self.rot_k2[(i, j)], start[(i, j)])
+                .widen(slack)
         })
     }
 
     /// The turned arm over the node.
     fn arm<E: Enclosure>(&self, arm: &Vector3<f64>, s: E, c: E, mag: f64) -> Vector3<E> {
         let slack = up(self.arm_err * mag);
-        Vector3::from_fn(|i, _| (s * self.arm_k[i] + c * self.arm_k2[i] + arm[i]).widen(slack))
+        Vector3::from_fn(|i, _| {
+            s.scaled_sum(self.arm_k[i], c, self.arm_k2[i], arm[i])
+                .widen(slack)
+        })
     }
 }
 

@@ -238,6 +238,20 @@ impl Enclosure for Affine {
         series::recip(self)
     }
 
+    /// One rounding bound for the whole expression instead of one per
+    /// operation: the centre is a sum of three terms (two of them
+    /// products) and the slope of two, each off by at most `γ₃ ≤ 2⁻⁵¹`
+    /// times its terms' absolute sum.
+    fn scaled_sum(self, a: f64, other: Affine, b: f64, k: f64) -> Affine {
+        let (ca, cb) = (self.c * a, other.c * b);
+        let (sa, sb) = (self.s * a, other.s * b);
+        let c = ca + cb + k;
+        let s = sa + sb;
+        let rounding = (ca.abs() + cb.abs() + k.abs() + sa.abs() + sb.abs()) * (2.0 * f64::EPSILON);
+        let r = bound(self.r * a.abs() + other.r * b.abs() + rounding);
+        Affine::checked(c, s, r)
+    }
+
     fn sin(self) -> Affine {
         self.sin_cos().0
     }

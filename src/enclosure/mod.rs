@@ -223,6 +223,12 @@ pub trait Enclosure:
     /// `cos x`, valid for any argument range.
     fn cos(self) -> Self;
 
+    /// `self·a + other·b + k` for numbers `a`, `b`, `k`: the rotation
+    /// series' entry (an arithmetic may fuse it into one rounding bound).
+    fn scaled_sum(self, a: f64, other: Self, b: f64, k: f64) -> Self {
+        self * a + other * b + k
+    }
+
     /// `(sin x, cos x)` together, sharing their expansion point.
     fn sin_cos(self) -> (Self, Self) {
         series::sin_cos(self)
