@@ -10,9 +10,10 @@
 use affine_ccd_scenes::backend::BackendConfig;
 use affine_ccd_scenes::{self as scenes, Backend, RunOptions, run_scene};
 
-/// Each scene is run this many times per backend; the smallest median
-/// step time is kept (the least disturbed run).
-const REPEATS: usize = 3;
+/// Each scene is run this many times per backend, the backends taking
+/// turns (so a slow spell of the machine falls on all three); the smallest
+/// median step time is kept (the least disturbed run).
+const REPEATS: usize = 5;
 
 /// The value after `--substeps`, if given (cargo adds its own `--bench`).
 fn substeps_arg() -> Option<u32> {
@@ -45,16 +46,17 @@ fn main() {
         "scene", "off ms", "rapier ms", "affine ms", "affine/rapier", "affine/off"
     );
     for scene in scenes::all() {
-        let mut medians = [f64::NAN; 3];
-        for (slot, backend) in
-            medians
-                .iter_mut()
-                .zip([Backend::Off, Backend::Rapier, Backend::Affine])
-        {
-            *slot = (0..REPEATS)
-                .filter_map(|_| run_scene(&scene, backend, &options).ok())
-                .map(|r| r.median_step_ms)
-                .fold(f64::INFINITY, f64::min);
+        let mut medians = [f64::INFINITY; 3];
+        for _ in 0..REPEATS {
+            for (slot, backend) in
+                medians
+                    .iter_mut()
+                    .zip([Backend::Off, Backend::Rapier, Backend::Affine])
+            {
+                if let Ok(run) = run_scene(&scene, backend, &options) {
+                    *slot = slot.min(run.median_step_ms);
+                }
+            }
         }
         let [off, rapier, affine] = medians;
         println!(
