@@ -75,6 +75,9 @@ impl CuboidCuboid {
                 out[i] = t[i].abs() - rb - self.face_a[i];
             }
         }
+        if super::apart_by(out, axes, 0b111) {
+            return;
+        }
         // b's faces: L = R_j.
         for j in 0..3 {
             if axes >> (3 + j) & 1 != 0 {
@@ -82,6 +85,9 @@ impl CuboidCuboid {
                 let ra = abs[(0, j)] * ea.x + abs[(1, j)] * ea.y + abs[(2, j)] * ea.z;
                 out[3 + j] = tl.abs() - ra - self.face_b[j];
             }
+        }
+        if super::apart_by(out, axes, 0b111_000) {
+            return;
         }
         // Edges: L = e_i × R_j.
         for i in 0..3 {

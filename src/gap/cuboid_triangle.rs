@@ -74,7 +74,9 @@ impl CuboidTriangle {
                 out[k] = gap([v[0][k], v[1][k], v[2][k]], E::constant(h[k]), self.pad);
             }
         }
-        let f = [v[1] - v[0], v[2] - v[1], v[0] - v[2]];
+        if super::apart_by(out, axes, 0b111) {
+            return;
+        }
         // The triangle's normal, turned from its own frame (tighter than
         // the cross product of two enclosed edges, and shared by the edge
         // axes below).
@@ -84,6 +86,10 @@ impl CuboidTriangle {
             let d = n.dot(&v[0]);
             out[3] = d.abs() - reach - up(self.pad * self.normal_len);
         }
+        if super::apart_by(out, axes, 0b1000) {
+            return;
+        }
+        let f = [v[1] - v[0], v[2] - v[1], v[0] - v[2]];
         let zero = E::zero();
         for k in 0..3 {
             let (k1, k2) = ((k + 1) % 3, (k + 2) % 3);

@@ -121,7 +121,8 @@ impl PairGap {
         }
     }
 
-    /// Enclose the axes set in `axes` over `span` into `out`.
+    /// Enclose the axes set in `axes` over `span` into `out`. A family may
+    /// stop early once an axis proves the pair apart ([`apart_by`]).
     pub fn eval<E: Enclosure>(
         &self,
         span: TimeSpan,
@@ -295,4 +296,61 @@ pub(crate) fn point(what: &'static str, v: Vector) -> Result<Vector3<f64>, CcdEr
 
 fn radius(r: f32) -> Result<f64, CcdError> {
     length("ball radius", r)
+}
+
+/// When one of the axes in `group` (already computed into `out`) proves
+/// the pair apart on the node, every other axis of `axes` gets its value and
+/// `true` comes back: the family need not compute the rest (the solver reads
+/// a separated pair only to see that it is apart). Most nodes of a search
+/// are apart, and most by one of the first axes (a box above a floor by the
+/// floor's face), so the other dozen are saved.
+pub(crate) fn apart_by<E: Enclosure>(out: &mut [E], axes: u64, group: u64) -> bool {
+    let mut bits = axes & group;
+    while bits != 0 {
+        let k = bits.trailing_zeros() as usize;
+        bits &= bits - 1;
+        if out[k].range().lo > 0.0 {
+            let value = out[k];
+            let mut rest = axes & !group;
+            while rest != 0 {
+                let j = rest.trailing_zeros() as usize;
+                rest &= rest - 1;
+                out[j] = value;
+            }
+            return true;
+        }
+    }
+    false
+}
+
+#[cfg(test)]
+mod tests {
+    use super::apart_by;
+    use crate::enclosure::{Enclosure, Interval};
+
+    #[test]
+    fn an_axis_that_separates_stands_in_for_the_rest() {
+        let iv = |lo, hi| Interval::new(lo, hi);
+        // Axes 0..4 asked for; 0 and 1 computed, 1 separates.
+        let mut out = [
+            iv(-1.0, 0.5),
+            iv(0.25, 2.0),
+            iv(-9.0, -8.0),
+            iv(-9.0, -8.0),
+            iv(5.0, 6.0),
+        ];
+        assert!(apart_by(&mut out, 0b1111, 0b11));
+        assert_eq!(out[2], iv(0.25, 2.0));
+        assert_eq!(out[3], iv(0.25, 2.0));
+        assert_eq!(out[0], iv(-1.0, 0.5), "the group's own axes are kept");
+        assert_eq!(out[4], iv(5.0, 6.0), "axes not asked for are left alone");
+        // None of the group separates: nothing changes.
+        let mut out = [iv(-1.0, 0.5), iv(-0.25, 2.0), iv(3.0, 4.0)];
+        assert!(!apart_by(&mut out, 0b111, 0b11));
+        assert_eq!(out[2], iv(3.0, 4.0));
+        // A separating axis not asked for does not count.
+        let mut out = [iv(1.0, 2.0), iv(-1.0, 1.0)];
+        assert!(!apart_by(&mut out, 0b10, 0b11));
+        assert!(out[0].range().lo > 0.0);
+    }
 }

@@ -157,7 +157,7 @@ impl SupportMap {
                 - self.b.support(&db, norm)
                 - up(self.skin * norm);
         }
-        if axes & !0b1 == 0 {
+        if axes & !0b1 == 0 || super::apart_by(out, axes, 0b1) {
             return;
         }
         let rel = a.pose.relative(b.pose);

@@ -86,6 +86,9 @@ impl TriangleTriangle {
             out[0] = plus - s;
             out[1] = minus - s;
         }
+        if super::apart_by(out, axes, 0b11) {
+            return;
+        }
         let a_in_b = if axes >> 2 != 0 {
             let rel = b.pose.relative(a.pose);
             Some((rel, corners(&rel, &self.a)))
@@ -102,6 +105,9 @@ impl TriangleTriangle {
             let s = E::constant(skin_norm_const(&self.normal_b, self.skin));
             out[2] = plus - s;
             out[3] = minus - s;
+        }
+        if super::apart_by(out, axes, 0b1100) {
+            return;
         }
         for i in 0..3 {
             let pick = 0b11u64 << (4 + 6 * i);
