@@ -314,28 +314,74 @@ fn segment_segment(a: &[Vector3<f64>; 2], b: &[Vector3<f64>; 2]) -> (Vector3<f64
     (a[0] + u * s, b[0] + v * t)
 }
 
-/// Points of segment `s` and of the box of half-extents `half` (centred at
-/// the origin, in its frame) close to each other: alternating projections
-/// from the segment's middle (each step brings the pair closer; a few give
-/// a direction as good as parry's for an axis). (on the segment, in the box)
+/// The closest points of segment `s` and the box of half-extents `half`
+/// (centred at the origin, in its frame): (on the segment, in the box).
+///
+/// The squared distance from `s(t) = s0 + t·d` to the box is
+/// `Σ_i max(|s_i(t)| − h_i, 0)²`, convex in `t` and a quadratic between the
+/// (at most six) parameters where a coordinate crosses a face plane; its
+/// minimum is the least of the pieces' minima. (Alternating projections,
+/// which this replaces, zig-zag slowly for a segment nearly parallel to a
+/// face: 4 steps left directions that cost some capsule queries 0.03 of
+/// the step of accuracy.)
 fn segment_box(s: &[Vector3<f64>; 2], half: &Vector3<f64>) -> (Vector3<f64>, Vector3<f64>) {
-    let d = s[1] - s[0];
-    let dd = d.dot(&d);
-    let on_segment = |q: &Vector3<f64>| {
-        let t = if dd > 1.0e-300 {
-            ((q - s[0]).dot(&d) / dd).clamp(0.0, 1.0)
-        } else {
-            0.0
-        };
-        s[0] + d * t
-    };
-    let in_box = |p: &Vector3<f64>| Vector3::from_fn(|i, _| p[i].clamp(-half[i], half[i]));
-    let mut p = 0.5 * (s[0] + s[1]);
-    let mut q = in_box(&p);
-    for _ in 0..4 {
-        p = on_segment(&q);
-        q = in_box(&p);
+    let (s0, d) = (s[0], s[1] - s[0]);
+    let mut cuts = [0.0f64; 8];
+    let mut n = 0;
+    cuts[n] = 0.0;
+    n += 1;
+    for i in 0..3 {
+        if d[i] != 0.0 {
+            for face in [-half[i], half[i]] {
+                let t = (face - s0[i]) / d[i];
+                if t > 0.0 && t < 1.0 {
+                    cuts[n] = t;
+                    n += 1;
+                }
+            }
+        }
     }
+    cuts[n] = 1.0;
+    n += 1;
+    let cuts = &mut cuts[..n];
+    cuts.sort_unstable_by(f64::total_cmp);
+    let gap2 = |t: f64| {
+        (0..3)
+            .map(|i| {
+                let x = (s0[i] + t * d[i]).abs() - half[i];
+                if x > 0.0 { x * x } else { 0.0 }
+            })
+            .sum::<f64>()
+    };
+    let (mut best_t, mut best) = (0.0, gap2(0.0));
+    for w in cuts.windows(2) {
+        let (a, b) = (w[0], w[1]);
+        // Which faces the piece lies beyond (at its middle), and the
+        // quadratic's minimiser there: Σ over them of (s0_i + t·d_i ∓ h_i)².
+        let mid = 0.5 * (a + b);
+        let (mut qa, mut qb) = (0.0, 0.0);
+        for i in 0..3 {
+            let x = s0[i] + mid * d[i];
+            let face = if x > half[i] {
+                half[i]
+            } else if x < -half[i] {
+                -half[i]
+            } else {
+                continue;
+            };
+            qa += d[i] * d[i];
+            qb += d[i] * (s0[i] - face);
+        }
+        let t = if qa > 0.0 { (-qb / qa).clamp(a, b) } else { b };
+        for t in [t, b] {
+            let g = gap2(t);
+            if g < best {
+                (best_t, best) = (t, g);
+            }
+        }
+    }
+    let p = s0 + d * best_t;
+    let q = Vector3::from_fn(|i, _| p[i].clamp(-half[i], half[i]));
     (p, q)
 }
 
@@ -347,5 +393,54 @@ fn face_normal(c: &Convex) -> Option<Vector3<f64>> {
             (q - p).cross(&(r - p)).try_normalize(1.0e-300)
         }
         _ => None,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::segment_box;
+    use nalgebra::Vector3;
+
+    /// Against dense sampling of the segment, on segments nearly parallel
+    /// to a face (where alternating projections stalled), crossing
+    /// corners, and degenerate (a point).
+    #[test]
+    fn segment_box_finds_the_closest_points() {
+        let half = Vector3::new(0.5, 0.2, 1.0);
+        let dist =
+            |p: &Vector3<f64>| Vector3::from_fn(|i, _| (p[i].abs() - half[i]).max(0.0)).norm();
+        let mut seed = 7u64;
+        let mut next = || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64 * 4.0 - 2.0
+        };
+        let mut segments = vec![
+            [Vector3::new(-3.0, 0.3, 0.0), Vector3::new(3.0, 0.3001, 0.0)],
+            [Vector3::new(0.6, 0.25, -2.0), Vector3::new(0.61, 0.26, 2.0)],
+            [Vector3::new(1.0, 1.0, 1.5), Vector3::new(1.0, 1.0, 1.5)],
+        ];
+        for _ in 0..300 {
+            segments.push([
+                Vector3::new(next(), next(), next()),
+                Vector3::new(next(), next(), next()),
+            ]);
+        }
+        for s in &segments {
+            let (p, q) = segment_box(s, &half);
+            let sampled = (0..=20_000)
+                .map(|k| dist(&(s[0] + (s[1] - s[0]) * (k as f64 / 20_000.0))))
+                .fold(f64::INFINITY, f64::min);
+            let found = (p - q).norm();
+            assert!(
+                found <= sampled + 1e-9,
+                "{s:?}: {found} vs sampled {sampled}"
+            );
+            assert!(
+                (dist(&p) - found).abs() < 1e-12,
+                "q is p's closest box point"
+            );
+        }
     }
 }
