@@ -141,6 +141,11 @@ fn earliest(
             origin.push(j);
         }
     }
+    if origin.len() == targets.len() {
+        // No mesh split: the targets as they are (a motion is 456 bytes).
+        let contacts_only = vec![false; targets.len()];
+        return earliest_piece(moving, targets, &contacts_only, opts, rules, report);
+    }
     let mut pieces: Vec<ShapeMotion> = origin.iter().map(|&j| targets[j]).collect();
     let mut contacts_only = vec![false; pieces.len()];
     for (piece, &j) in triangles.iter().zip(&split) {
