@@ -14,7 +14,6 @@ use rapier3d::prelude::{
     Collider, ColliderHandle, ColliderSet, ImpulseJointSet, PhysicsHooks, Pose, RigidBodyHandle,
     RigidBodySet, Vector,
 };
-use std::collections::HashMap;
 
 /// Everything the pair rules read.
 pub(crate) struct StageWorld<'a> {
@@ -43,12 +42,19 @@ impl StageWorld<'_> {
 /// and boxes in every round and every push (the box of a moving candidate
 /// takes two parry boxes and two poses). A body whose motion a round cut
 /// gets a new one. Clear it between steps.
+///
+/// Entries sit at their collider handle's slot (a hash of the handle cost
+/// more than the lookup itself), each marked with the handle and the step it
+/// was built in, so clearing is one counter.
 #[derive(Default)]
 pub(crate) struct MotionCache {
-    built: HashMap<ColliderHandle, Built>,
+    built: Vec<Option<Built>>,
+    step: u64,
 }
 
 struct Built {
+    handle: ColliderHandle,
+    step: u64,
     stamp: Option<Stamp>,
     motion: Motion,
     swept: Option<Aabb>,
@@ -68,7 +74,7 @@ struct Stamp {
 
 impl MotionCache {
     pub fn clear(&mut self) {
-        self.built.clear();
+        self.step += 1;
     }
 
     /// The motion of collider `handle` over the step, built once per body
@@ -114,26 +120,31 @@ impl MotionCache {
             accel: m.accel,
             dt: motions.dt,
         });
-        let stale = self.built.get(&handle).is_none_or(|b| b.stamp != stamp);
-        if stale {
-            let motion = motions.collider(co, bodies)?;
-            self.built.insert(
-                handle,
-                Built {
-                    stamp,
-                    motion,
-                    swept: None,
-                },
-            );
+        let slot = handle.into_raw_parts().0 as usize;
+        if slot >= self.built.len() {
+            self.built.resize_with(slot + 1, || None);
         }
-        Ok(self.built.get_mut(&handle).expect("just built"))
+        let step = self.step;
+        let fresh = |b: &Built| b.handle == handle && b.step == step && b.stamp == stamp;
+        if !self.built[slot].as_ref().is_some_and(fresh) {
+            let motion = motions.collider(co, bodies)?;
+            self.built[slot] = Some(Built {
+                handle,
+                step,
+                stamp,
+                motion,
+                swept: None,
+            });
+        }
+        Ok(self.built[slot].as_mut().expect("just built"))
     }
 }
 
 /// The moved bodies of this step, by handle, and the step length.
 pub(crate) struct StepMotions<'a> {
     pub moved: &'a [Moved],
-    pub index: HashMap<RigidBodyHandle, usize>,
+    /// Per body handle slot, its index in `moved` (`u32::MAX`: none).
+    index: Vec<u32>,
     pub dt: f64,
     /// Largest travel of any moved body, metres.
     pub margin: f64,
@@ -141,20 +152,23 @@ pub(crate) struct StepMotions<'a> {
 
 impl<'a> StepMotions<'a> {
     pub fn new(moved: &'a [Moved], dt: f64) -> StepMotions<'a> {
+        let slot = |h: RigidBodyHandle| h.into_raw_parts().0 as usize;
+        let slots = moved.iter().map(|m| slot(m.handle) + 1).max().unwrap_or(0);
+        let mut index = vec![u32::MAX; slots];
+        for (i, m) in moved.iter().enumerate() {
+            index[slot(m.handle)] = i as u32;
+        }
         StepMotions {
             moved,
-            index: moved
-                .iter()
-                .enumerate()
-                .map(|(i, m)| (m.handle, i))
-                .collect(),
+            index,
             dt,
             margin: moved.iter().map(|m| m.travel).fold(0.0, f64::max),
         }
     }
 
     pub fn body(&self, handle: RigidBodyHandle) -> Option<&Moved> {
-        self.index.get(&handle).map(|i| &self.moved[*i])
+        let i = *self.index.get(handle.into_raw_parts().0 as usize)?;
+        self.moved.get(i as usize).filter(|m| m.handle == handle)
     }
 
     /// A collider's motion over the step: its body's, or none.
