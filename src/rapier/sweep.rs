@@ -122,8 +122,10 @@ fn earliest(
     let mut triangles: Vec<MeshPiece> = Vec::new();
     let mut origin: Vec<usize> = Vec::with_capacity(targets.len());
     let mut split: Vec<usize> = Vec::new();
+    let mut travels: Vec<f64> = Vec::with_capacity(targets.len());
     for (j, t) in targets.iter().enumerate() {
         let travel = pair_travel(moving.shape, &moving.motion, t.shape, &t.motion);
+        travels.push(travel);
         let before = triangles.len();
         if rules.is_slow(moving.shape, travel)
             && mesh_triangles(
@@ -144,31 +146,57 @@ fn earliest(
     if origin.len() == targets.len() {
         // No mesh split: the targets as they are (a motion is 456 bytes).
         let contacts_only = vec![false; targets.len()];
-        return earliest_piece(moving, targets, &contacts_only, opts, rules, report);
+        return earliest_piece(
+            moving,
+            targets,
+            &travels,
+            &contacts_only,
+            opts,
+            rules,
+            report,
+        );
     }
     let mut pieces: Vec<ShapeMotion> = origin.iter().map(|&j| targets[j]).collect();
+    let mut piece_travels: Vec<f64> = origin.iter().map(|&j| travels[j]).collect();
     let mut contacts_only = vec![false; pieces.len()];
     for (piece, &j) in triangles.iter().zip(&split) {
+        let motion = targets[j].motion;
+        piece_travels.push(pair_travel(
+            moving.shape,
+            &moving.motion,
+            &piece.triangle,
+            &motion,
+        ));
         pieces.push(ShapeMotion {
             shape: &piece.triangle,
-            motion: targets[j].motion,
+            motion,
         });
         contacts_only.push(piece.contacts_only);
     }
     origin.extend(split);
-    let found = earliest_piece(moving, &pieces, &contacts_only, opts, rules, report)?;
+    let found = earliest_piece(
+        moving,
+        &pieces,
+        &piece_travels,
+        &contacts_only,
+        opts,
+        rules,
+        report,
+    )?;
     Ok(found.map(|e| Earliest {
         target: origin[e.target],
         ..e
     }))
 }
 
-/// [`earliest`] over targets none of which is split further;
-/// `contacts_only` marks those rapier's CCD leaves to its contacts (only
-/// `touching_pair`'s check that they do not sink deep applies).
+/// [`earliest`] over targets none of which is split further, with each
+/// pair's travel (`pair_travel`); `contacts_only` marks those rapier's CCD
+/// leaves to its contacts (only `touching_pair`'s check that they do not
+/// sink deep applies).
 fn earliest_piece(
     moving: &ShapeMotion,
     targets: &[ShapeMotion],
+    travels: &[f64],
     contacts_only: &[bool],
     opts: &QueryOptions,
     rules: &HandBack,
@@ -187,10 +215,8 @@ fn earliest_piece(
     let lo = opts.time_range.lo;
     let bands: Vec<f64> = targets
         .iter()
-        .map(|t| {
-            let travel = pair_travel(moving.shape, &moving.motion, t.shape, &t.motion);
-            rules.touch_band(moving, t, opts.skin, travel)
-        })
+        .zip(travels)
+        .map(|(t, &travel)| rules.touch_band(moving, t, opts.skin, travel))
         .collect();
     let widest = bands.iter().copied().fold(opts.skin, f64::max);
     // A small prediction finds the contact of a pair within its band, or
