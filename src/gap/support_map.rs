@@ -30,7 +30,7 @@
 //! tried first, and a node it proves apart needs no query.
 
 use super::Side;
-use super::support::{Convex, Core, ORTHO_SLACK, dot, mul, norm_up, tr_mul};
+use super::support::{Convex, Core, ORTHO_SLACK, dot, norm_up, tr_mul};
 use crate::convert::{pose_from_iso, vec_from_glam};
 use crate::enclosure::rounding::up;
 use crate::enclosure::{Enclosure, TimeSpan};
@@ -185,53 +185,45 @@ impl SupportMap {
         if axes & !0b1 == 0 || super::apart_by(out, axes, 0b1) {
             return;
         }
-        let rel = a.pose.relative(b.pose);
-        let (r, t) = (&rel.rotation, &rel.translation);
+        // A direction fixed in one side's frame, turned into the world with
+        // that side: `w = R_a(τ)·m` (or `R_b(τ)·k`). The gap along `w` is
+        // `d·w − h_a(R_aᵀw) − h_b(−R_bᵀw)` with `d` the origins' offset, and
+        // the own side's support is exact in `f64`. (No relative pose: that
+        // took 36 enclosure products on every node.)
+        let d = b.pose.translation - a.pose.translation;
+        let along = |w: &Vector3<E>| d.x * w.x + d.y * w.y + d.z * w.z;
+        let in_a = |m: &Vector3<f64>| {
+            let norm = norm_up(m);
+            let w = a.pose.rotate(m);
+            let db = -b.pose.inverse_rotate(&w);
+            along(&w) - self.a.support_f64(m) - self.b.support(&db, norm) - up(self.skin * norm)
+        };
+        let in_b = |k: &Vector3<f64>| {
+            let norm = norm_up(k);
+            let w = b.pose.rotate(k);
+            let da = a.pose.inverse_rotate(&w);
+            along(&w) - self.a.support(&da, norm) - self.b.support_f64(&(-k)) - up(self.skin * norm)
+        };
+        let k = ib.rotation.inverse() * n;
         if axes & 0b10 != 0 {
-            let norm = norm_up(&m);
-            let db = -tr_mul(r, &m);
-            out[1] = dot(t, &m)
-                - self.a.support_f64(&m)
-                - self.b.support(&db, norm)
-                - up(self.skin * norm);
+            out[1] = in_a(&m);
         }
         if axes & 0b100 != 0 {
-            let k = ib.rotation.inverse() * n;
-            let norm = norm_up(&k);
-            let da = mul(r, &k);
-            let along = t.x * da.x + t.y * da.y + t.z * da.z;
-            out[2] = along
-                - self.a.support(&da, norm)
-                - self.b.support_f64(&(-k))
-                - up(self.skin * norm);
+            out[2] = in_b(&k);
         }
         // The face normals, fixed in their triangle's frame and turned to
         // point from `a` towards `b` at the node's middle.
         let mut slot = Self::AXES;
         if let Some(f) = self.face_a {
             if axes >> slot & 1 != 0 {
-                let m = if f.dot(&m) >= 0.0 { f } else { -f };
-                let norm = norm_up(&m);
-                let db = -tr_mul(r, &m);
-                out[slot] = dot(t, &m)
-                    - self.a.support_f64(&m)
-                    - self.b.support(&db, norm)
-                    - up(self.skin * norm);
+                out[slot] = in_a(&if f.dot(&m) >= 0.0 { f } else { -f });
             }
             slot += 1;
         }
         if let Some(f) = self.face_b
             && axes >> slot & 1 != 0
         {
-            let k = ib.rotation.inverse() * n;
-            let k = if f.dot(&k) >= 0.0 { f } else { -f };
-            let norm = norm_up(&k);
-            let da = mul(r, &k);
-            let along = t.x * da.x + t.y * da.y + t.z * da.z;
-            out[slot] = along
-                - self.a.support(&da, norm)
-                - self.b.support_f64(&(-k))
-                - up(self.skin * norm);
+            out[slot] = in_b(&if f.dot(&k) >= 0.0 { f } else { -f });
         }
     }
 }
