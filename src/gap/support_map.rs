@@ -25,9 +25,11 @@
 //! 2. fixed in `b`'s frame: `n(τ) = R_b(τ)·k`, `k = R_b(mid)ᵀn`.
 //!
 //! Cost: one closest-points computation per node (parry's GJK, and EPA
-//! when overlapping, unless the closed form applies) plus about 70
-//! enclosure products. Where it is parry's, the last node's direction is
-//! tried first, and a node it proves apart needs no query.
+//! when overlapping, unless the closed form applies) plus some 60
+//! enclosure products and the support functions; a node that axis 0
+//! proves apart skips the other two. Where the direction is parry's, the
+//! last node's direction is tried first, and a node it proves apart needs
+//! no query.
 
 use super::Side;
 use super::support::{Convex, Core, ORTHO_SLACK, dot, norm_up, tr_mul};
