@@ -156,10 +156,12 @@ impl SupportMap {
     ) {
         let mid = span.lo + 0.5 * (span.hi - span.lo);
         let (ia, ib) = (a.motion.pose_at(mid), b.motion.pose_at(mid));
+        // The frames' origins' offset, read by every axis.
+        let d = b.pose.translation - a.pose.translation;
         // Axis 0: the direction `n`, fixed in the world.
         let world_axis = |n: &Vector3<f64>| {
             let norm = norm_up(n);
-            let along = dot(&(b.pose.translation - a.pose.translation), n);
+            let along = dot(&d, n);
             let da = tr_mul(&a.pose.rotation, n);
             let db = -tr_mul(&b.pose.rotation, n);
             along - self.a.support(&da, norm) - self.b.support(&db, norm) - up(self.skin * norm)
@@ -192,7 +194,6 @@ impl SupportMap {
         // `d·w − h_a(R_aᵀw) − h_b(−R_bᵀw)` with `d` the origins' offset, and
         // the own side's support is exact in `f64`. (No relative pose: that
         // took 36 enclosure products on every node.)
-        let d = b.pose.translation - a.pose.translation;
         let along = |w: &Vector3<E>| d.x * w.x + d.y * w.y + d.z * w.z;
         let in_a = |m: &Vector3<f64>| {
             let norm = norm_up(m);
