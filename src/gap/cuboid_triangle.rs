@@ -64,14 +64,13 @@ impl CuboidTriangle {
         let rel = a.pose.relative(b.pose);
         let v = self.corners.map(|c| rel.transform_point(&c));
         let h = &self.half;
-        // The gap along L given the corners' projections and the box's reach.
-        let gap = |p: [E; 3], reach: E, pad: f64| {
-            let (lo, hi) = least_greatest(&p);
-            (lo - reach).max(-hi - reach) - pad
-        };
+        // The gap along L given the triangle's projection `[lo, hi]` and the
+        // box's reach.
+        let gap = |(lo, hi): (E, E), reach: E, pad: f64| (lo - reach).max(-hi - reach) - pad;
         for k in 0..3 {
             if axes >> k & 1 != 0 {
-                out[k] = gap([v[0][k], v[1][k], v[2][k]], E::constant(h[k]), self.pad);
+                let corners = least_greatest(&[v[0][k], v[1][k], v[2][k]]);
+                out[k] = gap(corners, E::constant(h[k]), self.pad);
             }
         }
         if super::apart_by(out, axes, 0b111) {
@@ -108,8 +107,8 @@ impl CuboidTriangle {
                 let (l1, l2) = (-fj[k2], fj[k1]);
                 let p = l1 * v[j][k1] + l2 * v[j][k2];
                 let reach = l1.abs() * h[k1] + l2.abs() * h[k2];
-                let (lo, hi) = (p + nk_lo, p + nk_hi);
-                out[axis] = (lo - reach).max(-hi - reach) - up(self.pad * self.edge_len[j]);
+                let pad = up(self.pad * self.edge_len[j]);
+                out[axis] = gap((p + nk_lo, p + nk_hi), reach, pad);
             }
         }
     }
