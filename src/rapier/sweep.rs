@@ -21,6 +21,7 @@ use rapier3d::parry::query::{Contact, QueryDispatcher};
 use rapier3d::parry::shape::Shape;
 use rapier3d::prelude::RigidBodyHandle;
 use rapier3d::prelude::{BroadPhaseBvh, ColliderHandle, Vector};
+use std::borrow::Cow;
 use std::collections::HashSet;
 
 /// The earliest solid impact of one fast body.
@@ -143,41 +144,36 @@ fn earliest(
             origin.push(j);
         }
     }
-    if origin.len() == targets.len() {
-        // No mesh split: the targets as they are (a motion is 456 bytes).
-        let contacts_only = vec![false; targets.len()];
-        return earliest_piece(
-            moving,
-            targets,
-            &travels,
-            &contacts_only,
-            opts,
-            rules,
-            report,
-        );
-    }
-    let mut pieces: Vec<ShapeMotion> = origin.iter().map(|&j| targets[j]).collect();
-    let mut piece_travels: Vec<f64> = origin.iter().map(|&j| travels[j]).collect();
-    let mut contacts_only = vec![false; pieces.len()];
-    for (piece, &j) in triangles.iter().zip(&split) {
-        let motion = targets[j].motion;
-        piece_travels.push(pair_travel(
-            moving.shape,
-            &moving.motion,
-            &piece.triangle,
-            &motion,
-        ));
-        pieces.push(ShapeMotion {
-            shape: &piece.triangle,
-            motion,
-        });
-        contacts_only.push(piece.contacts_only);
-    }
-    origin.extend(split);
+    // Unsplit targets go as they are (a motion is 456 bytes); `origin` is
+    // then the identity.
+    let (pieces, travels, contacts_only): (Cow<[ShapeMotion]>, Cow<[f64]>, Vec<bool>) =
+        if origin.len() == targets.len() {
+            (targets.into(), travels.into(), vec![false; targets.len()])
+        } else {
+            let mut pieces: Vec<ShapeMotion> = origin.iter().map(|&j| targets[j]).collect();
+            let mut piece_travels: Vec<f64> = origin.iter().map(|&j| travels[j]).collect();
+            let mut contacts_only = vec![false; pieces.len()];
+            for (piece, &j) in triangles.iter().zip(&split) {
+                let motion = targets[j].motion;
+                piece_travels.push(pair_travel(
+                    moving.shape,
+                    &moving.motion,
+                    &piece.triangle,
+                    &motion,
+                ));
+                pieces.push(ShapeMotion {
+                    shape: &piece.triangle,
+                    motion,
+                });
+                contacts_only.push(piece.contacts_only);
+            }
+            origin.extend(split);
+            (pieces.into(), piece_travels.into(), contacts_only)
+        };
     let found = earliest_piece(
         moving,
         &pieces,
-        &piece_travels,
+        &travels,
         &contacts_only,
         opts,
         rules,
