@@ -59,6 +59,12 @@ pub struct SceneReport {
     pub steps: usize,
     /// Median wall time of one step (milliseconds), the oracles excluded.
     pub median_step_ms: f64,
+    /// Median wall time of one step less the backend's own CCD time
+    /// (milliseconds), when the backend can measure it: what rapier's
+    /// pipeline spent on this run's world. A backend that keeps bodies in
+    /// play that another loses steps a busier world, so this, not the other
+    /// backend's step, is the fair base for what the CCD stage itself costs.
+    pub median_pipeline_ms: Option<f64>,
     /// Total time spent in CCD (milliseconds), when the backend can measure it.
     pub ccd_ms: Option<f64>,
     /// What the affine stage did over the run (`None` for other backends).
@@ -144,6 +150,7 @@ pub fn run_scene(
     let mut watch = GuardWatch::new(&world, &setup.guards);
     let mut trace = options.trace.then(|| Trace::start(&world, scene.view));
     let mut times = Vec::with_capacity(steps);
+    let mut pipeline_times = Vec::with_capacity(steps);
     let (mut tunnelling, mut missed_contacts, mut deep_ends) = (0, 0, 0);
     let mut tunnelled = Vec::new();
     let mut frozen = FrozenCounter::default();
@@ -156,9 +163,14 @@ pub fn run_scene(
             script.apply(&mut world, end_time);
         }
         let before = Snapshot::take(&world);
+        let ccd_before = stepper.ccd_time();
         let started = Instant::now();
         stepper.step(&mut world);
-        times.push(started.elapsed());
+        let took = started.elapsed();
+        times.push(took);
+        if let (Some(before), Some(after)) = (ccd_before, stepper.ccd_time()) {
+            pipeline_times.push(took.saturating_sub(after.saturating_sub(before)));
+        }
         let tunnels = watch.check(&world, &setup.guards, &before, step);
         let contacts = counter::check_step(&world, &before, step);
         tunnelling += tunnels.len();
@@ -198,6 +210,7 @@ pub fn run_scene(
         deep_ends,
         steps,
         median_step_ms: median_ms(&mut times),
+        median_pipeline_ms: (!pipeline_times.is_empty()).then(|| median_ms(&mut pipeline_times)),
         ccd_ms: stepper.ccd_time().map(|d| d.as_secs_f64() * 1e3),
         profile: stepper.profile(),
         trace,
