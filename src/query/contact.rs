@@ -3,6 +3,7 @@
 //! time.
 
 use super::Toi;
+use super::box_overlap::{BoxPair, box_pair};
 use crate::convert::{pose_from_iso, vec_from_glam};
 use crate::motion::{Motion, Trajectory};
 use crate::solve::{RootStatus, SolveOutcome, SolveStats};
@@ -17,7 +18,8 @@ use rapier3d::parry::shape::Shape;
 /// parry 0.31.1 answers a convex shape against a *second* half-space
 /// wrongly (it uses the relative pose where it needs its inverse, so the
 /// depth grows with the distance from the plane's origin): the half-space
-/// is asked first and the answer flipped back.
+/// is asked first and the answer flipped back. Two boxes that overlap are
+/// answered by their separating axes instead of EPA (see `box_overlap`).
 pub(crate) fn contact(
     pose1: &Pose,
     shape1: &dyn Shape,
@@ -25,6 +27,13 @@ pub(crate) fn contact(
     shape2: &dyn Shape,
     prediction: f32,
 ) -> Result<Option<Contact>, rapier3d::parry::query::Unsupported> {
+    if let (Some(c1), Some(c2)) = (shape1.as_cuboid(), shape2.as_cuboid()) {
+        match box_pair(pose1, c1, pose2, c2, prediction as f64) {
+            BoxPair::Beyond => return Ok(None),
+            BoxPair::Overlap(c) => return Ok(Some(c)),
+            BoxPair::Apart => {}
+        }
+    }
     let flip = shape2.as_halfspace().is_some() && shape1.as_halfspace().is_none();
     if flip {
         rapier3d::parry::query::contact(pose2, shape2, pose1, shape1, prediction)

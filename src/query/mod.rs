@@ -26,6 +26,7 @@
 //! assert!((toi.time - 0.008).abs() < 1e-4 / 60.0);
 //! ```
 
+mod box_overlap;
 mod contact;
 mod frames;
 mod pairs;
