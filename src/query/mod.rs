@@ -26,11 +26,11 @@
 //! assert!((toi.time - 0.008).abs() < 1e-4 / 60.0);
 //! ```
 
-mod box_overlap;
 mod contact;
 mod frames;
 mod pairs;
 mod primitives;
+mod sat;
 
 pub(crate) use contact::{Witness, contact};
 pub use primitives::{PrimitiveToi, edge_edge_toi, vertex_face_toi};

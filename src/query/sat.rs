@@ -1,0 +1,559 @@
+//! Two overlapping polytopes (boxes, triangles): their contact by the
+//! separating axes, in `f64`, instead of parry's EPA.
+//!
+//! parry 0.31 sends a box–box or box–triangle contact query to GJK, and on
+//! to EPA when the shapes overlap (its dispatcher's box–box path is
+//! commented out, and the function behind it ends in `unreachable!()` on a
+//! degenerate edge pair), and EPA was most of what the stage paid for a
+//! box resting or sliding on a box or a mesh (written here, not borrowed,
+//! for that reason). For two convex polytopes the least translation that
+//! separates them is along one of the separating-axis candidates, the face
+//! normals of each and the cross products of an edge of each (their
+//! Minkowski difference has no other face normals), so minus the largest
+//! separation over those axes is the penetration depth, exactly. Edge
+//! pairs within [`PARALLEL`] of parallel are left out: their cross
+//! product has no stable direction, and the thin face of the Minkowski
+//! difference it stands for lies that close to others.
+//!
+//! When some axis separates, the axes only bound the distance from below:
+//! beyond the prediction that settles it; within it the caller asks parry
+//! (GJK alone, no EPA, for separated shapes).
+//!
+//! Like parry's dispatcher, this works in the first shape's frame: the
+//! second is placed by `pos12`, and the contact comes back with each
+//! point and normal in its own shape's frame.
+
+use crate::convert::{glam_from_vec, iso_from_pose, vec_from_glam};
+use nalgebra::{Isometry3, Matrix3, Point3, UnitQuaternion, Vector3};
+use rapier3d::parry::math::Pose;
+use rapier3d::parry::query::Contact;
+use rapier3d::parry::shape::Shape;
+
+/// Edge pairs closer to parallel than this (the sine of their angle) give
+/// no axis of their own.
+const PARALLEL: f64 = 1.0e-6;
+
+/// What the separating axes say about two polytopes.
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum SatAnswer {
+    /// Farther apart than the prediction along some axis: no contact.
+    Beyond,
+    /// Apart along some axis, by less than the prediction: the axes do not
+    /// give the distance (ask parry; the unit axis that separates most, in
+    /// the first shape's frame from the first towards the second, is a
+    /// good first direction for its GJK).
+    Apart(Vector3<f64>),
+    /// Not a box or triangle pair, or not finite: parry answers as it can.
+    Unknown,
+    /// Overlapping or touching: the contact (points and normals each in
+    /// its own shape's frame, `dist` minus the depth).
+    Overlap(Contact),
+}
+
+/// A box or a triangle, placed in the first shape's frame.
+#[derive(Clone, Copy, Debug)]
+enum Solid {
+    Box {
+        center: Vector3<f64>,
+        /// Unit axes, as columns.
+        axes: Matrix3<f64>,
+        half: Vector3<f64>,
+    },
+    Triangle([Vector3<f64>; 3]),
+}
+
+impl Solid {
+    /// The shape as a polytope placed by `rotation` and `translation`;
+    /// `None` for other shapes.
+    fn of(shape: &dyn Shape, rotation: &Matrix3<f64>, translation: &Vector3<f64>) -> Option<Solid> {
+        if let Some(c) = shape.as_cuboid() {
+            return Some(Solid::Box {
+                center: *translation,
+                axes: *rotation,
+                half: vec_from_glam(c.half_extents),
+            });
+        }
+        let t = shape.as_triangle()?;
+        let place = |v| rotation * vec_from_glam(v) + translation;
+        Some(Solid::Triangle([place(t.a), place(t.b), place(t.c)]))
+    }
+
+    fn is_finite(&self) -> bool {
+        match self {
+            Solid::Box { center, axes, half } => center
+                .iter()
+                .chain(axes.iter())
+                .chain(half.iter())
+                .all(|x| x.is_finite()),
+            Solid::Triangle(v) => v.iter().flat_map(|p| p.iter()).all(|x| x.is_finite()),
+        }
+    }
+
+    /// Unit face normals (a box's three axes, a triangle's normal; none
+    /// for a triangle without area).
+    fn faces(&self) -> ([Vector3<f64>; 3], usize) {
+        match self {
+            Solid::Box { axes, .. } => (
+                [
+                    axes.column(0).into_owned(),
+                    axes.column(1).into_owned(),
+                    axes.column(2).into_owned(),
+                ],
+                3,
+            ),
+            Solid::Triangle([a, b, c]) => {
+                let n = (b - a).cross(&(c - a));
+                let length = n.norm();
+                if length > 0.0 && length.is_finite() {
+                    ([n / length, Vector3::zeros(), Vector3::zeros()], 1)
+                } else {
+                    ([Vector3::zeros(); 3], 0)
+                }
+            }
+        }
+    }
+
+    /// Edge directions (a box's axes; a triangle's edges, not unit).
+    fn edges(&self) -> [Vector3<f64>; 3] {
+        match self {
+            Solid::Box { axes, .. } => [
+                axes.column(0).into_owned(),
+                axes.column(1).into_owned(),
+                axes.column(2).into_owned(),
+            ],
+            Solid::Triangle([a, b, c]) => [b - a, c - b, a - c],
+        }
+    }
+
+    /// The shape's extent along the unit direction `n`: `[min, max]`.
+    fn project(&self, n: &Vector3<f64>) -> (f64, f64) {
+        match self {
+            Solid::Box { center, axes, half } => {
+                let reach: f64 = (0..3).map(|i| half[i] * axes.column(i).dot(n).abs()).sum();
+                let at = center.dot(n);
+                (at - reach, at + reach)
+            }
+            Solid::Triangle(v) => {
+                let (a, b, c) = (v[0].dot(n), v[1].dot(n), v[2].dot(n));
+                (a.min(b).min(c), a.max(b).max(c))
+            }
+        }
+    }
+
+    /// A point of the shape farthest along `n`: where several are (a face
+    /// or an edge square to `n`), their middle.
+    fn support(&self, n: &Vector3<f64>) -> Vector3<f64> {
+        match self {
+            Solid::Box { center, axes, half } => {
+                let mut p = *center;
+                for i in 0..3 {
+                    let a = axes.column(i);
+                    let along = a.dot(n);
+                    if along.abs() > PARALLEL {
+                        p += a * (half[i] * along.signum());
+                    }
+                }
+                p
+            }
+            Solid::Triangle(v) => {
+                let far = v.iter().map(|p| p.dot(n)).fold(f64::NEG_INFINITY, f64::max);
+                let tied = v
+                    .iter()
+                    .filter(|p| far - p.dot(n) <= PARALLEL * (1.0 + far.abs()));
+                let (sum, count) = tied.fold((Vector3::zeros(), 0.0), |(s, k), p| (s + p, k + 1.0));
+                sum / count
+            }
+        }
+    }
+
+    /// Edge `k` as a segment (start, vector along it): for a box, the edge
+    /// along axis `k` farthest along `n`.
+    fn edge(&self, k: usize, n: &Vector3<f64>) -> (Vector3<f64>, Vector3<f64>) {
+        match self {
+            Solid::Box { center, axes, half } => {
+                let along = axes.column(k) * half[k];
+                let mut middle = *center;
+                for i in (0..3).filter(|&i| i != k) {
+                    let a = axes.column(i);
+                    middle += a * (half[i] * a.dot(n).signum());
+                }
+                (middle - along, along * 2.0)
+            }
+            Solid::Triangle(v) => (v[k], v[(k + 1) % 3] - v[k]),
+        }
+    }
+}
+
+/// Which axis separates least.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Axis {
+    FaceOfFirst,
+    FaceOfSecond,
+    /// Edge `i` of the first and edge `j` of the second.
+    Edges(usize, usize),
+}
+
+/// Whether both shapes are boxes or triangles (the pairs [`contact`]
+/// answers).
+pub(crate) fn handles(shape1: &dyn Shape, shape2: &dyn Shape) -> bool {
+    let polytope = |s: &dyn Shape| s.as_cuboid().is_some() || s.as_triangle().is_some();
+    polytope(shape1) && polytope(shape2)
+}
+
+/// Two boxes or triangles by their separating axes, the second placed by
+/// `pos12` in the first's frame, with `prediction` metres as in parry's
+/// contact query. `Unknown` for other shapes and for non-finite input.
+pub(crate) fn contact(
+    pos12: &Pose,
+    shape1: &dyn Shape,
+    shape2: &dyn Shape,
+    prediction: f64,
+) -> SatAnswer {
+    let raw = iso_from_pose(pos12);
+    let iso12 = Isometry3::from_parts(
+        raw.translation,
+        UnitQuaternion::new_normalize(raw.rotation.into_inner()),
+    );
+    let rotation12 = *iso12.rotation.to_rotation_matrix().matrix();
+    let translation12 = iso12.translation.vector;
+    let (Some(s1), Some(s2)) = (
+        Solid::of(shape1, &Matrix3::identity(), &Vector3::zeros()),
+        Solid::of(shape2, &rotation12, &translation12),
+    ) else {
+        return SatAnswer::Unknown;
+    };
+    if !(s1.is_finite() && s2.is_finite()) {
+        return SatAnswer::Unknown;
+    }
+    // The largest separation so far, along which unit axis (oriented from
+    // the first shape towards the second), of which kind.
+    let mut best = (f64::NEG_INFINITY, Vector3::x(), Axis::FaceOfFirst);
+    let consider = |best: &mut (f64, Vector3<f64>, Axis), n: Vector3<f64>, kind: Axis| {
+        let ((lo1, hi1), (lo2, hi2)) = (s1.project(&n), s2.project(&n));
+        let (ahead, behind) = (lo2 - hi1, lo1 - hi2);
+        let sep = ahead.max(behind);
+        if sep > best.0 {
+            *best = (sep, if ahead >= behind { n } else { -n }, kind);
+        }
+    };
+    let (faces1, count1) = s1.faces();
+    for n in &faces1[..count1] {
+        consider(&mut best, *n, Axis::FaceOfFirst);
+    }
+    let (faces2, count2) = s2.faces();
+    for n in &faces2[..count2] {
+        consider(&mut best, *n, Axis::FaceOfSecond);
+    }
+    // A face that separates settles it (the edges could only separate
+    // more): apart, or beyond the prediction, and in either case parry
+    // needs nothing more than a direction to start from. Only overlapping
+    // faces ask the edges, for the depth or for an edge that separates.
+    let faces_apart = best.0 > 0.0;
+    let (edges1, edges2) = (s1.edges(), s2.edges());
+    for (i, e1) in edges1.iter().enumerate().filter(|_| !faces_apart) {
+        for (j, e2) in edges2.iter().enumerate() {
+            let n = e1.cross(e2);
+            let length = n.norm();
+            if length > PARALLEL * e1.norm() * e2.norm() {
+                consider(&mut best, n / length, Axis::Edges(i, j));
+            }
+        }
+    }
+    let (sep, n, kind) = best;
+    if sep > prediction {
+        return SatAnswer::Beyond;
+    }
+    if !sep.is_finite() {
+        return SatAnswer::Unknown;
+    }
+    if sep > 0.0 {
+        return SatAnswer::Apart(n);
+    }
+    // `sep ≤ 0` is minus the depth. The witness: the deepest point of the
+    // shape whose face is not the axis, and where it leaves the other
+    // along the normal; for two edges, the closest points of the edges.
+    let (p1, p2) = match kind {
+        Axis::FaceOfFirst => {
+            let p2 = s2.support(&-n);
+            (p2 - n * sep, p2)
+        }
+        Axis::FaceOfSecond => {
+            let p1 = s1.support(&n);
+            (p1, p1 + n * sep)
+        }
+        Axis::Edges(i, j) => {
+            let (a, u) = s1.edge(i, &n);
+            let (b, w) = s2.edge(j, &-n);
+            let (t, s) = closest_on_segments(&a, &u, &b, &w);
+            (a + u * t, b + w * s)
+        }
+    };
+    // The second shape's point and normal back in its own frame.
+    let inverse = iso12.inverse();
+    let p2_local = inverse * Point3::from(p2);
+    let n2_local = inverse.rotation * -n;
+    SatAnswer::Overlap(Contact::new(
+        glam_from_vec(&p1),
+        glam_from_vec(&p2_local.coords),
+        glam_from_vec(&n),
+        glam_from_vec(&n2_local),
+        sep as f32,
+    ))
+}
+
+/// Parameters in `[0, 1]` of the closest points of the segments
+/// `a + t·u` and `b + s·w` (not parallel: the edge axes exclude those).
+fn closest_on_segments(
+    a: &Vector3<f64>,
+    u: &Vector3<f64>,
+    b: &Vector3<f64>,
+    w: &Vector3<f64>,
+) -> (f64, f64) {
+    let r = a - b;
+    let (uu, uw, ww) = (u.dot(u), u.dot(w), w.dot(w));
+    let (ur, wr) = (u.dot(&r), w.dot(&r));
+    let denom = uu * ww - uw * uw;
+    let mut t = if denom > 0.0 {
+        ((uw * wr - ww * ur) / denom).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    let mut s = if ww > 0.0 { (uw * t + wr) / ww } else { 0.0 };
+    if !(0.0..=1.0).contains(&s) {
+        s = s.clamp(0.0, 1.0);
+        t = if uu > 0.0 {
+            ((uw * s - ur) / uu).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+    }
+    (t, s)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rapier3d::math::{Rotation, Vector};
+    use rapier3d::parry::query::QueryDispatcher;
+    use rapier3d::parry::shape::{Cuboid, Triangle};
+
+    fn cuboid(x: f32, y: f32, z: f32) -> Cuboid {
+        Cuboid::new(Vector::new(x, y, z))
+    }
+
+    /// A small seeded generator (tests only).
+    struct Lcg(u64);
+    impl Lcg {
+        fn next(&mut self) -> f32 {
+            self.0 = self
+                .0
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((self.0 >> 33) as f64 / (1u64 << 31) as f64) as f32
+        }
+        fn range(&mut self, lo: f32, hi: f32) -> f32 {
+            lo + (hi - lo) * self.next()
+        }
+        fn vector(&mut self, spread: f32) -> Vector {
+            Vector::new(
+                self.range(-spread, spread),
+                self.range(-spread, spread),
+                self.range(-spread, spread),
+            )
+        }
+        fn pose(&mut self, spread: f32) -> Pose {
+            let axis = self.vector(1.0).normalize_or(Vector::Z);
+            Pose::from_parts(
+                self.vector(spread),
+                Rotation::from_axis_angle(axis, self.range(-3.0, 3.0)),
+            )
+        }
+        fn cuboid(&mut self, size: f32) -> Cuboid {
+            cuboid(
+                self.range(0.05, size),
+                self.range(0.05, size),
+                self.range(0.05, size),
+            )
+        }
+        fn triangle(&mut self, size: f32) -> Triangle {
+            Triangle::new(self.vector(size), self.vector(size), self.vector(size))
+        }
+    }
+
+    /// The least overlap of two shapes over a dense grid of directions: an
+    /// upper bound of the depth within the grid's resolution.
+    fn least_overlap(s1: &Solid, s2: &Solid) -> f64 {
+        let m = 200;
+        let mut least = f64::INFINITY;
+        for a in 0..m {
+            for b in 0..2 * m {
+                let th = std::f64::consts::PI * (a as f64 + 0.5) / m as f64;
+                let ph = std::f64::consts::PI * b as f64 / m as f64;
+                let n = Vector3::new(th.sin() * ph.cos(), th.sin() * ph.sin(), th.cos());
+                let ((lo1, hi1), (lo2, hi2)) = (s1.project(&n), s2.project(&n));
+                least = least.min((hi1 - lo2).min(hi2 - lo1));
+            }
+        }
+        least
+    }
+
+    /// Random pairs against parry's GJK/EPA: apart where parry says apart;
+    /// where they overlap, never deeper than the overlap along parry's
+    /// normal, parry's depth on most pairs (where EPA stops early, a dense
+    /// grid of directions' least overlap), and the witness points on the
+    /// shapes. Returns (overlaps, beyond, off parry's depth).
+    fn agree_with_parry(
+        cases: usize,
+        seed: u64,
+        make: impl Fn(&mut Lcg) -> (Box<dyn Shape>, Box<dyn Shape>),
+    ) -> (usize, usize, usize) {
+        let mut rng = Lcg(seed);
+        let (mut overlaps, mut beyond, mut disagree) = (0, 0, 0);
+        for case in 0..cases {
+            let (shape1, shape2) = make(&mut rng);
+            let (p1, p2) = (rng.pose(1.0), rng.pose(1.0));
+            let pos12 = p1.inv_mul(&p2);
+            let prediction = 0.1;
+            let parry = rapier3d::parry::query::DefaultQueryDispatcher
+                .contact(&pos12, shape1.as_ref(), shape2.as_ref(), prediction as f32)
+                .expect("parry answers these pairs");
+            match contact(&pos12, shape1.as_ref(), shape2.as_ref(), prediction) {
+                SatAnswer::Beyond => {
+                    beyond += 1;
+                    assert!(parry.is_none(), "case {case}: parry sees {parry:?}");
+                }
+                SatAnswer::Unknown => panic!("case {case}: no answer"),
+                SatAnswer::Apart(_) => {
+                    // Apart by at least the largest separation: parry's
+                    // distance may still be beyond the prediction.
+                    if let Some(c) = parry {
+                        assert!(c.dist > -1.0e-4, "case {case}: parry depth {}", c.dist);
+                    }
+                }
+                SatAnswer::Overlap(ours) => {
+                    overlaps += 1;
+                    let c = parry.expect("parry sees the overlap");
+                    let iso12 = iso_from_pose(&pos12);
+                    let r12 = *iso12.rotation.to_rotation_matrix().matrix();
+                    let s1 = Solid::of(shape1.as_ref(), &Matrix3::identity(), &Vector3::zeros())
+                        .unwrap();
+                    let s2 = Solid::of(shape2.as_ref(), &r12, &iso12.translation.vector).unwrap();
+                    let overlap = |n: &Vector3<f64>| {
+                        let ((lo1, hi1), (lo2, hi2)) = (s1.project(n), s2.project(n));
+                        (hi1 - lo2).min(hi2 - lo1)
+                    };
+                    let depth = -ours.dist as f64;
+                    let along_parry = overlap(&vec_from_glam(c.normal1));
+                    assert!(
+                        depth <= along_parry + 1.0e-5,
+                        "case {case}: depth {depth} beyond the overlap along parry's normal {along_parry}"
+                    );
+                    if (ours.dist - c.dist).abs() > 1.0e-4 * (1.0 + c.dist.abs()) {
+                        disagree += 1;
+                        let least = least_overlap(&s1, &s2);
+                        assert!(
+                            depth <= least + 1.0e-6 && least - depth < 5.0e-3,
+                            "case {case}: depth {depth}, grid {least}, parry {}",
+                            -c.dist
+                        );
+                        continue;
+                    }
+                    let on = |shape: &dyn Shape, p: Vector| {
+                        let proj = shape.project_local_point(p, false);
+                        (proj.point - p).length()
+                    };
+                    let (off1, off2) = (
+                        on(shape1.as_ref(), ours.point1),
+                        on(shape2.as_ref(), ours.point2),
+                    );
+                    assert!(
+                        off1 < 1.0e-4 && off2 < 1.0e-4,
+                        "case {case}: witnesses {off1} and {off2} m off their shapes"
+                    );
+                    // The normals are opposite in the world.
+                    let n2 = pos12.rotation * ours.normal2;
+                    assert!((n2 + ours.normal1).length() < 1.0e-5, "case {case}");
+                }
+            }
+        }
+        (overlaps, beyond, disagree)
+    }
+
+    #[test]
+    fn box_pairs_agree_with_parrys_contact() {
+        let (overlaps, beyond, disagree) = agree_with_parry(4000, 7, |rng| {
+            (Box::new(rng.cuboid(2.0)), Box::new(rng.cuboid(1.0)))
+        });
+        println!("boxes: {overlaps} overlaps ({disagree} off parry's depth), {beyond} beyond");
+        assert!(overlaps > 500 && beyond > 500 && disagree * 20 < overlaps);
+    }
+
+    #[test]
+    fn box_triangle_pairs_agree_with_parrys_contact() {
+        let (overlaps, beyond, disagree) = agree_with_parry(4000, 11, |rng| {
+            let (b, t) = (rng.cuboid(1.0), rng.triangle(1.5));
+            if rng.next() < 0.5 {
+                (Box::new(b), Box::new(t))
+            } else {
+                (Box::new(t), Box::new(b))
+            }
+        });
+        println!(
+            "box-triangle: {overlaps} overlaps ({disagree} off parry's depth), {beyond} beyond"
+        );
+        assert!(overlaps > 500 && beyond > 500 && disagree * 20 < overlaps);
+    }
+
+    #[test]
+    fn triangle_pairs_agree_with_parrys_contact() {
+        let (overlaps, beyond, disagree) = agree_with_parry(4000, 13, |rng| {
+            (Box::new(rng.triangle(1.0)), Box::new(rng.triangle(1.0)))
+        });
+        println!("triangles: {overlaps} overlaps ({disagree} off parry's depth), {beyond} beyond");
+        assert!(overlaps > 200 && beyond > 500 && disagree * 20 < overlaps);
+    }
+
+    /// A box resting 2 mm deep on a floor: the floor's normal, 2 mm deep,
+    /// the witness under the box's bottom face centre.
+    #[test]
+    fn a_box_sunk_into_a_floor() {
+        let floor = cuboid(20.0, 0.5, 20.0);
+        let cube = cuboid(0.2, 0.2, 0.2);
+        let pos12 = Pose::from_translation(Vector::new(3.0, 0.698, 1.0));
+        let SatAnswer::Overlap(c) = contact(&pos12, &floor, &cube, 0.01) else {
+            panic!("the cube is in the floor");
+        };
+        assert!((c.dist + 0.002).abs() < 1.0e-6, "depth {}", c.dist);
+        assert!((c.normal1 - Vector::Y).length() < 1.0e-6, "{:?}", c.normal1);
+        assert!((c.normal2 + Vector::Y).length() < 1.0e-6, "{:?}", c.normal2);
+        // In the floor's frame, and in the cube's.
+        assert!(
+            (c.point1 - Vector::new(3.0, 0.5, 1.0)).length() < 1.0e-5,
+            "{:?}",
+            c.point1
+        );
+        assert!(
+            (c.point2 - Vector::new(0.0, -0.2, 0.0)).length() < 1.0e-5,
+            "{:?}",
+            c.point2
+        );
+    }
+
+    /// Shapes it does not know, and non-finite poses, go to parry.
+    #[test]
+    fn other_shapes_and_bad_poses_go_to_parry() {
+        let ball = rapier3d::parry::shape::Ball::new(0.5);
+        let cube = cuboid(0.2, 0.2, 0.2);
+        let here = Pose::from_translation(Vector::new(0.1, 0.0, 0.0));
+        assert!(matches!(
+            contact(&here, &ball, &cube, 0.1),
+            SatAnswer::Unknown
+        ));
+        let nowhere = Pose::from_translation(Vector::new(f32::NAN, 0.0, 0.0));
+        assert!(matches!(
+            contact(&nowhere, &cube, &cube, 0.1),
+            SatAnswer::Unknown
+        ));
+        assert!(handles(&cube, &cube) && !handles(&ball, &cube));
+    }
+}
