@@ -44,9 +44,7 @@ impl<E: Enclosure> Pose<E> {
 
     /// `rotation·v` for a fixed vector of the frame.
     pub fn rotate(&self, v: &Vector3<f64>) -> Vector3<E> {
-        Vector3::from_fn(|i, _| {
-            self.rotation[(i, 0)] * v.x + self.rotation[(i, 1)] * v.y + self.rotation[(i, 2)] * v.z
-        })
+        Vector3::from_fn(|i, _| E::dot3_f64(row(&self.rotation, i), [v.x, v.y, v.z]))
     }
 
     /// The world position of a fixed point of the frame.
@@ -58,20 +56,28 @@ impl<E: Enclosure> Pose<E> {
     pub fn inverse_rotate(&self, v: &Vector3<E>) -> Vector3<E> {
         // Written out: nalgebra's generic product multiplies by α = 1 and
         // β = 0 in the enclosure arithmetic, three times the work.
-        let r = &self.rotation;
-        Vector3::from_fn(|i, _| r[(0, i)] * v.x + r[(1, i)] * v.y + r[(2, i)] * v.z)
+        Vector3::from_fn(|i, _| E::dot3(column(&self.rotation, i), [v.x, v.y, v.z]))
     }
 
     /// The pose of `other` seen from this frame: `self⁻¹·other`.
     pub fn relative(&self, other: &Pose<E>) -> Pose<E> {
         Pose {
             rotation: Matrix3::from_fn(|i, j| {
-                let (a, b) = (&self.rotation, &other.rotation);
-                a[(0, i)] * b[(0, j)] + a[(1, i)] * b[(1, j)] + a[(2, i)] * b[(2, j)]
+                E::dot3(column(&self.rotation, i), column(&other.rotation, j))
             }),
             translation: self.inverse_rotate(&(other.translation - self.translation)),
         }
     }
+}
+
+/// Row `i` of a matrix, for [`Enclosure::dot3`].
+pub(crate) fn row<T: Copy>(m: &Matrix3<T>, i: usize) -> [T; 3] {
+    [m[(i, 0)], m[(i, 1)], m[(i, 2)]]
+}
+
+/// Column `j` of a matrix, for [`Enclosure::dot3`].
+pub(crate) fn column<T: Copy>(m: &Matrix3<T>, j: usize) -> [T; 3] {
+    [m[(0, j)], m[(1, j)], m[(2, j)]]
 }
 
 /// Any motion a user can write as enclosures: the write-up asks for

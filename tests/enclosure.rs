@@ -40,6 +40,10 @@ enum Expr {
     Mul(Box<Expr>, Box<Expr>),
     Min(Box<Expr>, Box<Expr>),
     Max(Box<Expr>, Box<Expr>),
+    /// `Enclosure::dot3` of the first three and the last three.
+    Dot3(Box<[Expr; 6]>),
+    /// `Enclosure::dot3_f64` with these numbers.
+    Dot3C(Box<[Expr; 3]>, [f64; 3]),
 }
 
 use Expr::*;
@@ -69,6 +73,14 @@ fn eval<E: Enclosure>(x: &Expr, span: TimeSpan) -> Result<E, CcdError> {
         Mul(a, b) => eval::<E>(a, span)? * eval::<E>(b, span)?,
         Min(a, b) => eval::<E>(a, span)?.min(eval::<E>(b, span)?),
         Max(a, b) => eval::<E>(a, span)?.max(eval::<E>(b, span)?),
+        Dot3(v) => {
+            let e = |k: usize| eval::<E>(&v[k], span);
+            E::dot3([e(0)?, e(1)?, e(2)?], [e(3)?, e(4)?, e(5)?])
+        }
+        Dot3C(v, k) => {
+            let e = |i: usize| eval::<E>(&v[i], span);
+            E::dot3_f64([e(0)?, e(1)?, e(2)?], *k)
+        }
     })
 }
 
@@ -149,6 +161,32 @@ fn reference(x: &Expr, t: f64) -> Option<(f64, f64)> {
             (p, e * f.abs() + U * p.abs())
         }
         Widen(a, _) => reference(a, t)?,
+        // A sum of three products, each as `Mul` accounts it, then two
+        // rounded additions.
+        Dot3(v) => {
+            let mut sum = (0.0, 0.0);
+            for k in 0..3 {
+                let (va, ea) = reference(&v[k], t)?;
+                let (vb, eb) = reference(&v[k + 3], t)?;
+                let p = va * vb;
+                let s = sum.0 + p;
+                sum = (
+                    s,
+                    sum.1 + va.abs() * eb + vb.abs() * ea + ea * eb + U * p.abs() + U * s.abs(),
+                );
+            }
+            sum
+        }
+        Dot3C(v, c) => {
+            let mut sum = (0.0, 0.0);
+            for k in 0..3 {
+                let (va, ea) = reference(&v[k], t)?;
+                let p = va * c[k];
+                let s = sum.0 + p;
+                sum = (s, sum.1 + ea * c[k].abs() + U * p.abs() + U * s.abs());
+            }
+            sum
+        }
         Add(a, b) | Sub(a, b) | Mul(a, b) | Min(a, b) | Max(a, b) => {
             let (va, ea) = reference(a, t)?;
             let (vb, eb) = reference(b, t)?;
@@ -215,6 +253,12 @@ fn expr() -> impl Strategy<Value = Expr> {
             (inner.clone(), inner.clone()).prop_map(move |(x, y)| Mul(b(x), b(y))),
             (inner.clone(), inner.clone()).prop_map(move |(x, y)| Min(b(x), b(y))),
             (inner.clone(), inner.clone()).prop_map(move |(x, y)| Max(b(x), b(y))),
+            prop::array::uniform6(inner.clone()).prop_map(|v| Dot3(Box::new(v))),
+            (
+                prop::array::uniform3(inner.clone()),
+                prop::array::uniform3(scalar())
+            )
+                .prop_map(|(v, k)| Dot3C(Box::new(v), k)),
         ]
     })
 }
@@ -228,6 +272,8 @@ fn poison(x: &Expr, k: usize, bad: f64, stand_in: f64) -> Expr {
             Neg(a) | Sqr(a) | Sqrt(a) | Recip(a) | Abs(a) | Sin(a) | Cos(a) => count(a),
             AddC(a, _) | SubC(a, _) | MulC(a, _) | Scale(a, ..) | Widen(a, _) => count(a),
             Add(a, b) | Sub(a, b) | Mul(a, b) | Min(a, b) | Max(a, b) => count(a) + count(b),
+            Dot3(v) => v.iter().map(count).sum(),
+            Dot3C(v, _) => v.iter().map(count).sum(),
         }
     }
     fn go(x: &Expr, k: &mut usize, bad: f64, stand_in: f64) -> Expr {
@@ -259,6 +305,8 @@ fn poison(x: &Expr, k: usize, bad: f64, stand_in: f64) -> Expr {
             Mul(x, y) => Mul(b(go(x, k, bad, stand_in)), b(go(y, k, bad, stand_in))),
             Min(x, y) => Min(b(go(x, k, bad, stand_in)), b(go(y, k, bad, stand_in))),
             Max(x, y) => Max(b(go(x, k, bad, stand_in)), b(go(y, k, bad, stand_in))),
+            Dot3(v) => Dot3(Box::new(v.each_ref().map(|x| go(x, k, bad, stand_in)))),
+            Dot3C(v, c) => Dot3C(Box::new(v.each_ref().map(|x| go(x, k, bad, stand_in))), *c),
         }
     }
     let mut k = k % count(x);

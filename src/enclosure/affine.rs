@@ -252,6 +252,49 @@ impl Enclosure for Affine {
         Affine::checked(c, s, r)
     }
 
+    /// One rounding bound for the whole dot product instead of one per
+    /// operation. The centre `Σ (cᵢc'ᵢ + ½sᵢs'ᵢ)` and the slope
+    /// `Σ (cᵢs'ᵢ + sᵢc'ᵢ)` are sums of six rounded products each, off by at
+    /// most `γ₇ < 2⁻⁵⁰` times their terms' absolute sum (the bound takes
+    /// `2⁻⁵⁰`, four machine epsilons); the error term gathers each
+    /// product's `|½sᵢs'ᵢ|` (from `e² ∈ [0, 1]`) and its cross terms with
+    /// the operands' error radii, as [`Mul`] does.
+    fn dot3(x: [Affine; 3], y: [Affine; 3]) -> Affine {
+        let (mut c, mut s) = (0.0, 0.0);
+        let (mut terms, mut nonlinear) = (0.0, 0.0);
+        for (a, b) in x.iter().zip(&y) {
+            let c00 = a.c * b.c;
+            let half11 = 0.5 * (a.s * b.s);
+            let (p01, p10) = (a.c * b.s, a.s * b.c);
+            c += c00 + half11;
+            s += p01 + p10;
+            terms += c00.abs() + half11.abs() + p01.abs() + p10.abs();
+            nonlinear += half11.abs()
+                + (a.c.abs() + a.s.abs()) * b.r
+                + (b.c.abs() + b.s.abs()) * a.r
+                + a.r * b.r;
+        }
+        let r = bound(nonlinear + terms * (4.0 * f64::EPSILON));
+        Affine::checked(c, s, r)
+    }
+
+    /// One rounding bound for the whole sum: centre and slope are sums of
+    /// three rounded products each, off by at most `γ₄ < 2⁻⁵⁰` times their
+    /// terms' absolute sum; the error radii scale with `|kᵢ|`.
+    fn dot3_f64(x: [Affine; 3], k: [f64; 3]) -> Affine {
+        let (mut c, mut s) = (0.0, 0.0);
+        let (mut terms, mut radius) = (0.0, 0.0);
+        for (a, &k) in x.iter().zip(&k) {
+            let (ck, sk) = (a.c * k, a.s * k);
+            c += ck;
+            s += sk;
+            terms += ck.abs() + sk.abs();
+            radius += a.r * k.abs();
+        }
+        let r = bound(radius + terms * (4.0 * f64::EPSILON));
+        Affine::checked(c, s, r)
+    }
+
     fn sin(self) -> Affine {
         self.sin_cos().0
     }

@@ -229,6 +229,19 @@ pub trait Enclosure:
         self * a + other * b + k
     }
 
+    /// `x₀·y₀ + x₁·y₁ + x₂·y₂`: the dot product of two enclosed 3-vectors,
+    /// the inner step of every pose product (an arithmetic may fuse it into
+    /// one rounding bound).
+    fn dot3(x: [Self; 3], y: [Self; 3]) -> Self {
+        x[0] * y[0] + x[1] * y[1] + x[2] * y[2]
+    }
+
+    /// `x₀·k₀ + x₁·k₁ + x₂·k₂` for numbers `kᵢ`: an enclosed vector against
+    /// a fixed one (an arithmetic may fuse it into one rounding bound).
+    fn dot3_f64(x: [Self; 3], k: [f64; 3]) -> Self {
+        x[0] * k[0] + x[1] * k[1] + x[2] * k[2]
+    }
+
     /// `(sin x, cos x)` together, sharing their expansion point.
     fn sin_cos(self) -> (Self, Self) {
         series::sin_cos(self)

@@ -21,6 +21,7 @@ use super::Side;
 use super::support::ORTHO_SLACK;
 use crate::enclosure::rounding::up;
 use crate::enclosure::{Enclosure, TimeSpan};
+use crate::motion::{column, row};
 use nalgebra::Vector3;
 
 #[derive(Clone, Debug)]
@@ -71,7 +72,7 @@ impl CuboidCuboid {
         // a's faces: L = e_i.
         for i in 0..3 {
             if axes >> i & 1 != 0 {
-                let rb = abs[(i, 0)] * eb.x + abs[(i, 1)] * eb.y + abs[(i, 2)] * eb.z;
+                let rb = E::dot3_f64(row(&abs, i), [eb.x, eb.y, eb.z]);
                 out[i] = t[i].abs() - rb - self.face_a[i];
             }
         }
@@ -81,8 +82,8 @@ impl CuboidCuboid {
         // b's faces: L = R_j.
         for j in 0..3 {
             if axes >> (3 + j) & 1 != 0 {
-                let tl = t.x * r[(0, j)] + t.y * r[(1, j)] + t.z * r[(2, j)];
-                let ra = abs[(0, j)] * ea.x + abs[(1, j)] * ea.y + abs[(2, j)] * ea.z;
+                let tl = E::dot3([t.x, t.y, t.z], column(&r, j));
+                let ra = E::dot3_f64(column(&abs, j), [ea.x, ea.y, ea.z]);
                 out[3 + j] = tl.abs() - ra - self.face_b[j];
             }
         }

@@ -81,7 +81,7 @@ impl CuboidTriangle {
         // axes below).
         let n = rel.rotate(&self.normal);
         if axes >> 3 & 1 != 0 {
-            let reach = n.x.abs() * h.x + n.y.abs() * h.y + n.z.abs() * h.z;
+            let reach = E::dot3_f64([n.x.abs(), n.y.abs(), n.z.abs()], [h.x, h.y, h.z]);
             let d = n.dot(&v[0]);
             out[3] = d.abs() - reach - up(self.pad * self.normal_len);
         }

@@ -5,7 +5,7 @@
 //! read.
 
 use crate::enclosure::{Enclosure, TimeSpan};
-use crate::motion::{Motion, Pose, Trajectory};
+use crate::motion::{Motion, Pose, Trajectory, column, row};
 use nalgebra::{Isometry3, Matrix3, Vector3};
 use std::collections::HashMap;
 
@@ -84,9 +84,7 @@ impl<E: Enclosure> Frames<E> {
                 let p = self.pose(parent, span);
                 Pose {
                     rotation: Matrix3::from_fn(|r, c| {
-                        p.rotation[(r, 0)] * rotation[(0, c)]
-                            + p.rotation[(r, 1)] * rotation[(1, c)]
-                            + p.rotation[(r, 2)] * rotation[(2, c)]
+                        E::dot3_f64(row(&p.rotation, r), column(&rotation, c))
                     }),
                     translation: p.transform_point(&origin),
                 }
