@@ -44,7 +44,7 @@ impl<E: Enclosure> Pose<E> {
 
     /// `rotation·v` for a fixed vector of the frame.
     pub fn rotate(&self, v: &Vector3<f64>) -> Vector3<E> {
-        Vector3::from_fn(|i, _| E::dot3_f64(row(&self.rotation, i), [v.x, v.y, v.z]))
+        Vector3::from_fn(|i, _| E::dot_f64(row(&self.rotation, i), [v.x, v.y, v.z]))
     }
 
     /// The world position of a fixed point of the frame.
@@ -56,26 +56,26 @@ impl<E: Enclosure> Pose<E> {
     pub fn inverse_rotate(&self, v: &Vector3<E>) -> Vector3<E> {
         // Written out: nalgebra's generic product multiplies by α = 1 and
         // β = 0 in the enclosure arithmetic, three times the work.
-        Vector3::from_fn(|i, _| E::dot3(column(&self.rotation, i), [v.x, v.y, v.z]))
+        Vector3::from_fn(|i, _| E::dot(column(&self.rotation, i), [v.x, v.y, v.z]))
     }
 
     /// The pose of `other` seen from this frame: `self⁻¹·other`.
     pub fn relative(&self, other: &Pose<E>) -> Pose<E> {
         Pose {
             rotation: Matrix3::from_fn(|i, j| {
-                E::dot3(column(&self.rotation, i), column(&other.rotation, j))
+                E::dot(column(&self.rotation, i), column(&other.rotation, j))
             }),
             translation: self.inverse_rotate(&(other.translation - self.translation)),
         }
     }
 }
 
-/// Row `i` of a matrix, for [`Enclosure::dot3`].
+/// Row `i` of a matrix, for [`Enclosure::dot`].
 pub(crate) fn row<T: Copy>(m: &Matrix3<T>, i: usize) -> [T; 3] {
     [m[(i, 0)], m[(i, 1)], m[(i, 2)]]
 }
 
-/// Column `j` of a matrix, for [`Enclosure::dot3`].
+/// Column `j` of a matrix, for [`Enclosure::dot`].
 pub(crate) fn column<T: Copy>(m: &Matrix3<T>, j: usize) -> [T; 3] {
     [m[(0, j)], m[(1, j)], m[(2, j)]]
 }

@@ -40,9 +40,11 @@ enum Expr {
     Mul(Box<Expr>, Box<Expr>),
     Min(Box<Expr>, Box<Expr>),
     Max(Box<Expr>, Box<Expr>),
-    /// `Enclosure::dot3` of the first three and the last three.
+    /// `Enclosure::dot` of the first three and the last three.
     Dot3(Box<[Expr; 6]>),
-    /// `Enclosure::dot3_f64` with these numbers.
+    /// `Enclosure::dot` of the first two and the last two.
+    Dot2(Box<[Expr; 4]>),
+    /// `Enclosure::dot_f64` with these numbers.
     Dot3C(Box<[Expr; 3]>, [f64; 3]),
 }
 
@@ -75,11 +77,15 @@ fn eval<E: Enclosure>(x: &Expr, span: TimeSpan) -> Result<E, CcdError> {
         Max(a, b) => eval::<E>(a, span)?.max(eval::<E>(b, span)?),
         Dot3(v) => {
             let e = |k: usize| eval::<E>(&v[k], span);
-            E::dot3([e(0)?, e(1)?, e(2)?], [e(3)?, e(4)?, e(5)?])
+            E::dot([e(0)?, e(1)?, e(2)?], [e(3)?, e(4)?, e(5)?])
+        }
+        Dot2(v) => {
+            let e = |k: usize| eval::<E>(&v[k], span);
+            E::dot([e(0)?, e(1)?], [e(2)?, e(3)?])
         }
         Dot3C(v, k) => {
             let e = |i: usize| eval::<E>(&v[i], span);
-            E::dot3_f64([e(0)?, e(1)?, e(2)?], *k)
+            E::dot_f64([e(0)?, e(1)?, e(2)?], *k)
         }
     })
 }
@@ -163,11 +169,16 @@ fn reference(x: &Expr, t: f64) -> Option<(f64, f64)> {
         Widen(a, _) => reference(a, t)?,
         // A sum of three products, each as `Mul` accounts it, then two
         // rounded additions.
-        Dot3(v) => {
+        Dot3(..) | Dot2(..) => {
+            let (left, right): (Vec<&Expr>, Vec<&Expr>) = match x {
+                Dot3(v) => (v[..3].iter().collect(), v[3..].iter().collect()),
+                Dot2(v) => (v[..2].iter().collect(), v[2..].iter().collect()),
+                _ => unreachable!(),
+            };
             let mut sum = (0.0, 0.0);
-            for k in 0..3 {
-                let (va, ea) = reference(&v[k], t)?;
-                let (vb, eb) = reference(&v[k + 3], t)?;
+            for (a, b) in left.into_iter().zip(right) {
+                let (va, ea) = reference(a, t)?;
+                let (vb, eb) = reference(b, t)?;
                 let p = va * vb;
                 let s = sum.0 + p;
                 sum = (
@@ -254,6 +265,7 @@ fn expr() -> impl Strategy<Value = Expr> {
             (inner.clone(), inner.clone()).prop_map(move |(x, y)| Min(b(x), b(y))),
             (inner.clone(), inner.clone()).prop_map(move |(x, y)| Max(b(x), b(y))),
             prop::array::uniform6(inner.clone()).prop_map(|v| Dot3(Box::new(v))),
+            prop::array::uniform4(inner.clone()).prop_map(|v| Dot2(Box::new(v))),
             (
                 prop::array::uniform3(inner.clone()),
                 prop::array::uniform3(scalar())
@@ -273,6 +285,7 @@ fn poison(x: &Expr, k: usize, bad: f64, stand_in: f64) -> Expr {
             AddC(a, _) | SubC(a, _) | MulC(a, _) | Scale(a, ..) | Widen(a, _) => count(a),
             Add(a, b) | Sub(a, b) | Mul(a, b) | Min(a, b) | Max(a, b) => count(a) + count(b),
             Dot3(v) => v.iter().map(count).sum(),
+            Dot2(v) => v.iter().map(count).sum(),
             Dot3C(v, _) => v.iter().map(count).sum(),
         }
     }
@@ -306,6 +319,7 @@ fn poison(x: &Expr, k: usize, bad: f64, stand_in: f64) -> Expr {
             Min(x, y) => Min(b(go(x, k, bad, stand_in)), b(go(y, k, bad, stand_in))),
             Max(x, y) => Max(b(go(x, k, bad, stand_in)), b(go(y, k, bad, stand_in))),
             Dot3(v) => Dot3(Box::new(v.each_ref().map(|x| go(x, k, bad, stand_in)))),
+            Dot2(v) => Dot2(Box::new(v.each_ref().map(|x| go(x, k, bad, stand_in)))),
             Dot3C(v, c) => Dot3C(Box::new(v.each_ref().map(|x| go(x, k, bad, stand_in))), *c),
         }
     }

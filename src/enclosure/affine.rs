@@ -254,12 +254,14 @@ impl Enclosure for Affine {
 
     /// One rounding bound for the whole dot product instead of one per
     /// operation. The centre `Σ (cᵢc'ᵢ + ½sᵢs'ᵢ)` and the slope
-    /// `Σ (cᵢs'ᵢ + sᵢc'ᵢ)` are sums of six rounded products each, off by at
-    /// most `γ₇ < 2⁻⁵⁰` times their terms' absolute sum (the bound takes
-    /// `2⁻⁵⁰`, four machine epsilons); the error term gathers each
+    /// `Σ (cᵢs'ᵢ + sᵢc'ᵢ)` are sums of `2N` rounded products each, every
+    /// product passing through at most `N + 1` roundings, so they are off
+    /// by at most `γ_{N+1} < (N + 1)·ε` times their terms' absolute sum
+    /// (`ε` the machine epsilon, `2u`); the error term gathers each
     /// product's `|½sᵢs'ᵢ|` (from `e² ∈ [0, 1]`) and its cross terms with
-    /// the operands' error radii, as [`Mul`] does.
-    fn dot3(x: [Affine; 3], y: [Affine; 3]) -> Affine {
+    /// the operands' error radii, as [`Mul`] does. For `N ≤ 16` the radius
+    /// takes fewer than the 32 roundings [`bound`] allows.
+    fn dot<const N: usize>(x: [Affine; N], y: [Affine; N]) -> Affine {
         let (mut c, mut s) = (0.0, 0.0);
         let (mut terms, mut nonlinear) = (0.0, 0.0);
         for (a, b) in x.iter().zip(&y) {
@@ -274,14 +276,14 @@ impl Enclosure for Affine {
                 + (b.c.abs() + b.s.abs()) * a.r
                 + a.r * b.r;
         }
-        let r = bound(nonlinear + terms * (4.0 * f64::EPSILON));
+        let r = bound(nonlinear + terms * ((N as f64 + 1.0) * f64::EPSILON));
         Affine::checked(c, s, r)
     }
 
     /// One rounding bound for the whole sum: centre and slope are sums of
-    /// three rounded products each, off by at most `γ₄ < 2⁻⁵⁰` times their
-    /// terms' absolute sum; the error radii scale with `|kᵢ|`.
-    fn dot3_f64(x: [Affine; 3], k: [f64; 3]) -> Affine {
+    /// `N` rounded products each, off by at most `γ_N < (N + 1)·ε` times
+    /// their terms' absolute sum; the error radii scale with `|kᵢ|`.
+    fn dot_f64<const N: usize>(x: [Affine; N], k: [f64; N]) -> Affine {
         let (mut c, mut s) = (0.0, 0.0);
         let (mut terms, mut radius) = (0.0, 0.0);
         for (a, &k) in x.iter().zip(&k) {
@@ -291,7 +293,7 @@ impl Enclosure for Affine {
             terms += ck.abs() + sk.abs();
             radius += a.r * k.abs();
         }
-        let r = bound(radius + terms * (4.0 * f64::EPSILON));
+        let r = bound(radius + terms * ((N as f64 + 1.0) * f64::EPSILON));
         Affine::checked(c, s, r)
     }
 

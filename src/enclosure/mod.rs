@@ -229,17 +229,25 @@ pub trait Enclosure:
         self * a + other * b + k
     }
 
-    /// `x₀·y₀ + x₁·y₁ + x₂·y₂`: the dot product of two enclosed 3-vectors,
-    /// the inner step of every pose product (an arithmetic may fuse it into
-    /// one rounding bound).
-    fn dot3(x: [Self; 3], y: [Self; 3]) -> Self {
-        x[0] * y[0] + x[1] * y[1] + x[2] * y[2]
+    /// `Σ xᵢ·yᵢ`: the dot product of two enclosed vectors (`N ≤ 16`), the
+    /// inner step of every pose product and separating axis (an arithmetic
+    /// may fuse it into one rounding bound).
+    fn dot<const N: usize>(x: [Self; N], y: [Self; N]) -> Self {
+        let mut sum = Self::zero();
+        for (k, (a, b)) in x.into_iter().zip(y).enumerate() {
+            sum = if k == 0 { a * b } else { sum + a * b };
+        }
+        sum
     }
 
-    /// `x₀·k₀ + x₁·k₁ + x₂·k₂` for numbers `kᵢ`: an enclosed vector against
-    /// a fixed one (an arithmetic may fuse it into one rounding bound).
-    fn dot3_f64(x: [Self; 3], k: [f64; 3]) -> Self {
-        x[0] * k[0] + x[1] * k[1] + x[2] * k[2]
+    /// `Σ xᵢ·kᵢ` for numbers `kᵢ` (`N ≤ 16`): an enclosed vector against a
+    /// fixed one (an arithmetic may fuse it into one rounding bound).
+    fn dot_f64<const N: usize>(x: [Self; N], k: [f64; N]) -> Self {
+        let mut sum = Self::zero();
+        for (i, (a, k)) in x.into_iter().zip(k).enumerate() {
+            sum = if i == 0 { a * k } else { sum + a * k };
+        }
+        sum
     }
 
     /// `(sin x, cos x)` together, sharing their expansion point.

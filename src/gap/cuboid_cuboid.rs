@@ -72,7 +72,7 @@ impl CuboidCuboid {
         // a's faces: L = e_i.
         for i in 0..3 {
             if axes >> i & 1 != 0 {
-                let rb = E::dot3_f64(row(&abs, i), [eb.x, eb.y, eb.z]);
+                let rb = E::dot_f64(row(&abs, i), [eb.x, eb.y, eb.z]);
                 out[i] = t[i].abs() - rb - self.face_a[i];
             }
         }
@@ -82,8 +82,8 @@ impl CuboidCuboid {
         // b's faces: L = R_j.
         for j in 0..3 {
             if axes >> (3 + j) & 1 != 0 {
-                let tl = E::dot3([t.x, t.y, t.z], column(&r, j));
-                let ra = E::dot3_f64(column(&abs, j), [ea.x, ea.y, ea.z]);
+                let tl = E::dot([t.x, t.y, t.z], column(&r, j));
+                let ra = E::dot_f64(column(&abs, j), [ea.x, ea.y, ea.z]);
                 out[3 + j] = tl.abs() - ra - self.face_b[j];
             }
         }
@@ -99,9 +99,9 @@ impl CuboidCuboid {
                     continue;
                 }
                 let (j1, j2) = ((j + 1) % 3, (j + 2) % 3);
-                let tl = t[i2] * r[(i1, j)] - t[i1] * r[(i2, j)];
-                let ra = abs[(i2, j)] * ea[i1] + abs[(i1, j)] * ea[i2];
-                let rb = abs[(i, j2)] * eb[j1] + abs[(i, j1)] * eb[j2];
+                let tl = E::dot([t[i2], -t[i1]], [r[(i1, j)], r[(i2, j)]]);
+                let ra = E::dot_f64([abs[(i2, j)], abs[(i1, j)]], [ea[i1], ea[i2]]);
+                let rb = E::dot_f64([abs[(i, j2)], abs[(i, j1)]], [eb[j1], eb[j2]]);
                 out[k] = tl.abs() - ra - rb - self.skin;
             }
         }

@@ -81,7 +81,7 @@ impl CuboidTriangle {
         // axes below).
         let n = rel.rotate(&self.normal);
         if axes >> 3 & 1 != 0 {
-            let reach = E::dot3_f64([n.x.abs(), n.y.abs(), n.z.abs()], [h.x, h.y, h.z]);
+            let reach = E::dot_f64([n.x.abs(), n.y.abs(), n.z.abs()], [h.x, h.y, h.z]);
             let d = n.dot(&v[0]);
             out[3] = d.abs() - reach - up(self.pad * self.normal_len);
         }
@@ -105,8 +105,8 @@ impl CuboidTriangle {
                 }
                 // L = e_k × f_j: component k is 0, k1 is −f[k2], k2 is f[k1].
                 let (l1, l2) = (-fj[k2], fj[k1]);
-                let p = l1 * v[j][k1] + l2 * v[j][k2];
-                let reach = l1.abs() * h[k1] + l2.abs() * h[k2];
+                let p = E::dot([l1, l2], [v[j][k1], v[j][k2]]);
+                let reach = E::dot_f64([l1.abs(), l2.abs()], [h[k1], h[k2]]);
                 let pad = up(self.pad * self.edge_len[j]);
                 out[axis] = gap((p + nk_lo, p + nk_hi), reach, pad);
             }

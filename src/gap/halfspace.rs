@@ -53,7 +53,7 @@ impl HalfSpaceConvex {
     ) {
         let m = mul(&a.pose.rotation, &self.normal);
         let delta = b.pose.translation - a.pose.translation;
-        let along = E::dot3([m.x, m.y, m.z], [delta.x, delta.y, delta.z]);
+        let along = E::dot([m.x, m.y, m.z], [delta.x, delta.y, delta.z]);
         let down = -b.pose.inverse_rotate(&m);
         out[0] = along - self.other.support(&down, self.norm) - self.skin;
     }

@@ -186,7 +186,7 @@ impl Convex {
     pub fn support<E: Enclosure>(&self, d: &Vector3<E>, norm: f64) -> E {
         let core = match &self.core {
             Core::Point => E::zero(),
-            Core::Cuboid(e) => E::dot3_f64([d.x.abs(), d.y.abs(), d.z.abs()], [e.x, e.y, e.z]),
+            Core::Cuboid(e) => E::dot_f64([d.x.abs(), d.y.abs(), d.z.abs()], [e.x, e.y, e.z]),
             Core::Segment([a, b]) => dot(d, a).max(dot(d, b)),
             Core::Triangle([a, b, c]) => dot(d, a).max(dot(d, b)).max(dot(d, c)),
             Core::Polyhedron(vs) => polyhedron_support(vs, d),
@@ -241,17 +241,17 @@ impl Convex {
 
 /// `v·w` for an enclosed `v` and a fixed `w`.
 pub(crate) fn dot<E: Enclosure>(v: &Vector3<E>, w: &Vector3<f64>) -> E {
-    E::dot3_f64([v.x, v.y, v.z], [w.x, w.y, w.z])
+    E::dot_f64([v.x, v.y, v.z], [w.x, w.y, w.z])
 }
 
 /// `R·w` for an enclosed `R` and a fixed `w`.
 pub(crate) fn mul<E: Enclosure>(r: &Matrix3<E>, w: &Vector3<f64>) -> Vector3<E> {
-    Vector3::from_fn(|i, _| E::dot3_f64(row(r, i), [w.x, w.y, w.z]))
+    Vector3::from_fn(|i, _| E::dot_f64(row(r, i), [w.x, w.y, w.z]))
 }
 
 /// `Rᵀ·w` for an enclosed `R` and a fixed `w`.
 pub(crate) fn tr_mul<E: Enclosure>(r: &Matrix3<E>, w: &Vector3<f64>) -> Vector3<E> {
-    Vector3::from_fn(|j, _| E::dot3_f64(column(r, j), [w.x, w.y, w.z]))
+    Vector3::from_fn(|j, _| E::dot_f64(column(r, j), [w.x, w.y, w.z]))
 }
 
 /// An upper bound of `|v|`: `norm()` is within two ulps of the truth.

@@ -194,7 +194,7 @@ impl SupportMap {
         // `d·w − h_a(R_aᵀw) − h_b(−R_bᵀw)` with `d` the origins' offset, and
         // the own side's support is exact in `f64`. (No relative pose: that
         // took 36 enclosure products on every node.)
-        let along = |w: &Vector3<E>| E::dot3([d.x, d.y, d.z], [w.x, w.y, w.z]);
+        let along = |w: &Vector3<E>| E::dot([d.x, d.y, d.z], [w.x, w.y, w.z]);
         let in_a = |m: &Vector3<f64>| {
             let norm = norm_up(m);
             let w = a.pose.rotate(m);

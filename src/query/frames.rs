@@ -84,7 +84,7 @@ impl<E: Enclosure> Frames<E> {
                 let p = self.pose(parent, span);
                 Pose {
                     rotation: Matrix3::from_fn(|r, c| {
-                        E::dot3_f64(row(&p.rotation, r), column(&rotation, c))
+                        E::dot_f64(row(&p.rotation, r), column(&rotation, c))
                     }),
                     translation: p.transform_point(&origin),
                 }
