@@ -52,36 +52,6 @@ pub(crate) fn contact(
 /// own composite contacts recurse through parry's dispatcher.
 struct AxesFirst;
 
-/// parry's contact of two convex shapes apart by less than `prediction`
-/// (its GJK, started along `axis`: a separating direction of the first
-/// shape's frame, pointing towards the second), in parry's form.
-fn closest_points(
-    pos12: &Pose,
-    g1: &dyn SupportMap,
-    g2: &dyn SupportMap,
-    prediction: Real,
-    axis: Vector3<f64>,
-) -> Option<Contact> {
-    let mut simplex = VoronoiSimplex::new();
-    let init = Some(glam_from_vec(&axis));
-    match details::contact_support_map_support_map_with_params(
-        pos12,
-        g1,
-        g2,
-        prediction,
-        &mut simplex,
-        init,
-    ) {
-        GJKResult::ClosestPoints(point1, point2_1, normal1) => {
-            let dist = (point2_1 - point1).dot(normal1);
-            let point2 = pos12.inverse_transform_point(point2_1);
-            let normal2 = pos12.rotation.inverse() * -normal1;
-            Some(Contact::new(point1, point2, normal1, normal2, dist))
-        }
-        _ => None,
-    }
-}
-
 impl QueryDispatcher for AxesFirst {
     fn contact(
         &self,
@@ -96,7 +66,7 @@ impl QueryDispatcher for AxesFirst {
                 SatAnswer::Overlap(c) => return Ok(Some(c)),
                 SatAnswer::Apart(axis) => {
                     if let (Some(s1), Some(s2)) = (g1.as_support_map(), g2.as_support_map()) {
-                        return Ok(closest_points(pos12, s1, s2, prediction, axis));
+                        return Ok(gjk_contact(pos12, s1, s2, prediction, axis));
                     }
                 }
                 SatAnswer::Unknown => {}
@@ -179,6 +149,36 @@ impl QueryDispatcher for AxesFirst {
             end_time,
             stop_at_penetration,
         )
+    }
+}
+
+/// parry's contact of two convex shapes apart by less than `prediction`
+/// (its GJK, started along `axis`: a separating direction of the first
+/// shape's frame, pointing towards the second), in parry's form.
+fn gjk_contact(
+    pos12: &Pose,
+    g1: &dyn SupportMap,
+    g2: &dyn SupportMap,
+    prediction: Real,
+    axis: Vector3<f64>,
+) -> Option<Contact> {
+    let mut simplex = VoronoiSimplex::new();
+    let init = Some(glam_from_vec(&axis));
+    match details::contact_support_map_support_map_with_params(
+        pos12,
+        g1,
+        g2,
+        prediction,
+        &mut simplex,
+        init,
+    ) {
+        GJKResult::ClosestPoints(point1, point2_1, normal1) => {
+            let dist = (point2_1 - point1).dot(normal1);
+            let point2 = pos12.inverse_transform_point(point2_1);
+            let normal2 = pos12.rotation.inverse() * -normal1;
+            Some(Contact::new(point1, point2, normal1, normal2, dist))
+        }
+        _ => None,
     }
 }
 
