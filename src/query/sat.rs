@@ -263,7 +263,8 @@ pub(crate) fn contact(
     if sep > prediction {
         return SatAnswer::Beyond;
     }
-    if !sep.is_finite() {
+    // No number, or a depth beyond `f32` (a contact must carry it).
+    if !(sep as f32).is_finite() {
         return SatAnswer::Unknown;
     }
     if sep > 0.0 {
@@ -537,6 +538,37 @@ mod tests {
             "{:?}",
             c.point2
         );
+    }
+
+    /// Degenerate boxes and triangles (no size, no area, a point) and far
+    /// or huge poses give an answer, never a panic, and an overlap only
+    /// with a finite depth.
+    #[test]
+    fn degenerate_shapes_are_answered() {
+        let p = Vector::new(0.1, 0.0, 0.0);
+        let shapes: Vec<Box<dyn Shape>> = vec![
+            Box::new(cuboid(0.0, 0.0, 0.0)),
+            Box::new(cuboid(1.0, 0.0, 1.0)),
+            Box::new(Triangle::new(p, p, p)),
+            Box::new(Triangle::new(Vector::ZERO, p, p * 2.0)),
+            Box::new(Triangle::new(Vector::ZERO, Vector::X, Vector::Z)),
+            Box::new(cuboid(1.0e20, 1.0, 1.0)),
+        ];
+        let poses = [
+            Pose::IDENTITY,
+            Pose::from_translation(Vector::new(0.05, 0.0, 0.0)),
+            Pose::from_parts(Vector::new(3.0e7, 0.0, 0.0), Rotation::from_rotation_y(0.3)),
+            Pose::from_translation(Vector::splat(f32::MAX)),
+        ];
+        for (i, a) in shapes.iter().enumerate() {
+            for (j, b) in shapes.iter().enumerate() {
+                for (k, pose) in poses.iter().enumerate() {
+                    if let SatAnswer::Overlap(c) = contact(pose, a.as_ref(), b.as_ref(), 0.1) {
+                        assert!(c.dist.is_finite(), "shapes {i}, {j}, pose {k}: {c:?}");
+                    }
+                }
+            }
+        }
     }
 
     /// Shapes it does not know, and non-finite poses, go to parry.
