@@ -280,7 +280,10 @@ fn has_closed_form(a: &Core, b: &Core) -> bool {
 /// The closest points of segments `a` and `b` (on `a`, on `b`): the
 /// parameters of the unclamped closest pair, clamped to the segments in
 /// turn (exact for segments; points are segments of length 0).
-fn segment_segment(a: &[Vector3<f64>; 2], b: &[Vector3<f64>; 2]) -> (Vector3<f64>, Vector3<f64>) {
+pub(crate) fn segment_segment(
+    a: &[Vector3<f64>; 2],
+    b: &[Vector3<f64>; 2],
+) -> (Vector3<f64>, Vector3<f64>) {
     let (u, v, w) = (a[1] - a[0], b[1] - b[0], a[0] - b[0]);
     let (uu, vv, uv, uw, vw) = (u.dot(&u), v.dot(&v), u.dot(&v), u.dot(&w), v.dot(&w));
     let tiny = 1.0e-300;

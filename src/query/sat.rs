@@ -24,6 +24,7 @@
 //! point and normal in its own shape's frame.
 
 use crate::convert::{glam_from_vec, iso_from_pose, vec_from_glam};
+use crate::gap::segment_segment;
 use nalgebra::{Isometry3, Matrix3, Point3, UnitQuaternion, Vector3};
 use rapier3d::parry::math::Pose;
 use rapier3d::parry::query::Contact;
@@ -93,14 +94,7 @@ impl Solid {
     /// for a triangle without area).
     fn faces(&self) -> ([Vector3<f64>; 3], usize) {
         match self {
-            Solid::Box { axes, .. } => (
-                [
-                    axes.column(0).into_owned(),
-                    axes.column(1).into_owned(),
-                    axes.column(2).into_owned(),
-                ],
-                3,
-            ),
+            Solid::Box { axes, .. } => (columns(axes), 3),
             Solid::Triangle([a, b, c]) => {
                 let n = (b - a).cross(&(c - a));
                 let length = n.norm();
@@ -116,11 +110,7 @@ impl Solid {
     /// Edge directions (a box's axes; a triangle's edges, not unit).
     fn edges(&self) -> [Vector3<f64>; 3] {
         match self {
-            Solid::Box { axes, .. } => [
-                axes.column(0).into_owned(),
-                axes.column(1).into_owned(),
-                axes.column(2).into_owned(),
-            ],
+            Solid::Box { axes, .. } => columns(axes),
             Solid::Triangle([a, b, c]) => [b - a, c - b, a - c],
         }
     }
@@ -166,9 +156,9 @@ impl Solid {
         }
     }
 
-    /// Edge `k` as a segment (start, vector along it): for a box, the edge
-    /// along axis `k` farthest along `n`.
-    fn edge(&self, k: usize, n: &Vector3<f64>) -> (Vector3<f64>, Vector3<f64>) {
+    /// Edge `k` as a segment (its two ends): for a box, the edge along
+    /// axis `k` farthest along `n`.
+    fn edge(&self, k: usize, n: &Vector3<f64>) -> [Vector3<f64>; 2] {
         match self {
             Solid::Box { center, axes, half } => {
                 let along = axes.column(k) * half[k];
@@ -177,11 +167,16 @@ impl Solid {
                     let a = axes.column(i);
                     middle += a * (half[i] * a.dot(n).signum());
                 }
-                (middle - along, along * 2.0)
+                [middle - along, middle + along]
             }
-            Solid::Triangle(v) => (v[k], v[(k + 1) % 3] - v[k]),
+            Solid::Triangle(v) => [v[k], v[(k + 1) % 3]],
         }
     }
+}
+
+/// A box's unit axes, its face normals and edge directions alike.
+fn columns(axes: &Matrix3<f64>) -> [Vector3<f64>; 3] {
+    [0, 1, 2].map(|j| axes.column(j).into_owned())
 }
 
 /// Which axis separates least.
@@ -282,12 +277,7 @@ pub(crate) fn contact(
             let p1 = s1.support(&n);
             (p1, p1 + n * sep)
         }
-        Axis::Edges(i, j) => {
-            let (a, u) = s1.edge(i, &n);
-            let (b, w) = s2.edge(j, &-n);
-            let (t, s) = closest_on_segments(&a, &u, &b, &w);
-            (a + u * t, b + w * s)
-        }
+        Axis::Edges(i, j) => segment_segment(&s1.edge(i, &n), &s2.edge(j, &-n)),
     };
     // The second shape's point and normal back in its own frame.
     let inverse = iso12.inverse();
@@ -300,35 +290,6 @@ pub(crate) fn contact(
         glam_from_vec(&n2_local),
         sep as f32,
     ))
-}
-
-/// Parameters in `[0, 1]` of the closest points of the segments
-/// `a + t·u` and `b + s·w` (not parallel: the edge axes exclude those).
-fn closest_on_segments(
-    a: &Vector3<f64>,
-    u: &Vector3<f64>,
-    b: &Vector3<f64>,
-    w: &Vector3<f64>,
-) -> (f64, f64) {
-    let r = a - b;
-    let (uu, uw, ww) = (u.dot(u), u.dot(w), w.dot(w));
-    let (ur, wr) = (u.dot(&r), w.dot(&r));
-    let denom = uu * ww - uw * uw;
-    let mut t = if denom > 0.0 {
-        ((uw * wr - ww * ur) / denom).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    let mut s = if ww > 0.0 { (uw * t + wr) / ww } else { 0.0 };
-    if !(0.0..=1.0).contains(&s) {
-        s = s.clamp(0.0, 1.0);
-        t = if uu > 0.0 {
-            ((uw * s - ur) / uu).clamp(0.0, 1.0)
-        } else {
-            0.0
-        };
-    }
-    (t, s)
 }
 
 #[cfg(test)]
