@@ -4,7 +4,9 @@
 use super::backoff::{
     HandBack, Stop, pair_relative_travel, pair_travel, stop_after_contact, stop_when_deep,
 };
-use super::candidates::{Candidate, Interaction, MeshPiece, gather, interaction, mesh_triangles};
+use super::candidates::{
+    Candidate, Interaction, MeshPiece, gather, interaction, meets, mesh_triangles, rough_swept_box,
+};
 use super::moved::Moved;
 use super::report::CcdReport;
 use super::search;
@@ -398,9 +400,9 @@ pub(crate) fn sweep_body(
         let Some(co1) = scene.colliders.get(h1).filter(|c| c.is_enabled()) else {
             continue;
         };
-        let (motion1, swept) = ws.motions.get_swept(motions, h1, co1, scene.bodies)?;
-        let mut failure = None;
-        let cache = &mut ws.motions;
+        // The broad phase with a rough box first: a collider that meets
+        // nothing needs no motion (building one costs more than the query).
+        let rough = rough_swept_box(motions, co1, scene.bodies);
         gather(
             scene,
             broad_phase,
@@ -408,16 +410,30 @@ pub(crate) fn sweep_body(
             motions,
             h1,
             co1,
-            &swept,
-            |h2, co2| match cache.get_swept(motions, h2, co2, scene.bodies) {
-                Ok((_, swept)) => Some(swept),
-                Err(e) => {
-                    failure = Some(e);
-                    None
-                }
-            },
+            &rough,
+            |_, co2| Some(rough_swept_box(motions, co2, scene.bodies)),
             &mut ws.candidates,
         );
+        if ws.candidates.is_empty() {
+            continue;
+        }
+        // Then the motion and its own swept box, which the candidates must
+        // meet too (a moving one by its own swept box).
+        let (motion1, swept) = ws.motions.get_swept(motions, h1, co1, scene.bodies)?;
+        let mut failure = None;
+        let cache = &mut ws.motions;
+        ws.candidates.retain(|c| {
+            let co2 = &scene.colliders[c.handle];
+            meets(motions, c.handle, co2, &swept, |h2, co2| {
+                match cache.get_swept(motions, h2, co2, scene.bodies) {
+                    Ok((_, swept)) => Some(swept),
+                    Err(e) => {
+                        failure = Some(e);
+                        None
+                    }
+                }
+            })
+        });
         if let Some(e) = failure {
             return Err(e);
         }
