@@ -197,23 +197,37 @@ impl AffineCcd {
         } else {
             1
         };
-        let mut total = CcdReport::default();
-        if substeps > 1 {
-            substep::record_aims(bodies, &mut self.aims);
-        } else {
-            self.aims.clear();
+        if substeps == 1 {
+            // The whole step is one piece: its report is the step's.
+            self.report.clear();
+            self.step_piece(
+                pipeline,
+                gravity,
+                &params,
+                dt,
+                islands,
+                broad_phase,
+                narrow_phase,
+                bodies,
+                colliders,
+                impulse_joints,
+                multibody_joints,
+                soft_bodies,
+                hooks,
+                events,
+            );
+            return &self.report;
         }
+        let mut total = CcdReport::default();
+        substep::record_aims(bodies, &mut self.aims);
         let (mut remaining, mut left) = (dt, substeps);
         // Whether the last piece ended at a predicted impact.
         let mut at_impact = false;
-        // One piece, the whole step, unless `substeps` > 1.
         while left > 0 {
             // Predict over the rest of the step; the piece ends at the first
             // impact. Right after one it is the shortest allowed: the
             // contact just made bounces there (see `substep::piece`).
-            // Timed only when there is something to predict (a clock read
-            // costs about as much as the rest of a quiet step).
-            let clock = (substeps > 1).then(Instant::now);
+            let clock = Instant::now();
             let impact = if at_impact {
                 Some(0.0)
             } else if left > 1 {
@@ -242,9 +256,7 @@ impl AffineCcd {
                 (done + length) / dt
             };
             substep::aim(bodies, &self.aims, share);
-            if let Some(clock) = clock {
-                total.elapsed += clock.elapsed();
-            }
+            total.elapsed += clock.elapsed();
 
             let mut piece = params;
             piece.dt = length;

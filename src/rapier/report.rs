@@ -106,6 +106,21 @@ impl CcdReport {
         self.elapsed += piece.elapsed;
     }
 
+    /// Back to an empty account, keeping the buffers.
+    pub(crate) fn clear(&mut self) {
+        let (mut hits, mut skipped) = (
+            std::mem::take(&mut self.hits),
+            std::mem::take(&mut self.skipped),
+        );
+        hits.clear();
+        skipped.clear();
+        *self = CcdReport {
+            hits,
+            skipped,
+            ..CcdReport::default()
+        };
+    }
+
     pub(crate) fn skip(&mut self, body: RigidBodyHandle, reason: SkipReason) {
         if !self.skipped.iter().any(|s| s.body == body) {
             self.skipped.push(SkippedBody { body, reason });
