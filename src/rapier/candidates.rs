@@ -125,7 +125,8 @@ pub(crate) fn interaction(
 }
 
 /// The colliders the fast collider `(h1, co1)` with swept box `swept` may
-/// meet, with how each pair is handled (see [`meets`] for the boxes).
+/// meet, of those `wanted`, with how each pair is handled (see [`meets`]
+/// for the boxes).
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn gather(
     scene: &StageWorld,
@@ -135,6 +136,7 @@ pub(crate) fn gather(
     h1: ColliderHandle,
     co1: &Collider,
     swept: &Aabb,
+    wanted: impl Fn(&Collider) -> bool,
     mut own_box: impl FnMut(ColliderHandle, &Collider) -> Option<Aabb>,
     out: &mut Vec<Candidate>,
 ) {
@@ -148,6 +150,9 @@ pub(crate) fn gather(
     let margin = ((motions.margin * (1.0 + 1.0e-5)) as f32).next_up();
     let wide = swept.loosened(margin);
     for (h2, co2) in query.intersect_aabb_conservative(wide) {
+        if !wanted(co2) {
+            continue;
+        }
         let Some(interaction) = interaction(scene, h1, co1, h2, co2) else {
             continue;
         };

@@ -22,7 +22,7 @@ use rapier3d::parry::bounding_volume::{Aabb, BoundingVolume};
 use rapier3d::parry::query::{Contact, QueryDispatcher};
 use rapier3d::parry::shape::Shape;
 use rapier3d::prelude::RigidBodyHandle;
-use rapier3d::prelude::{BroadPhaseBvh, ColliderHandle, Vector};
+use rapier3d::prelude::{BroadPhaseBvh, Collider, ColliderHandle, Vector};
 use std::borrow::Cow;
 use std::collections::HashSet;
 
@@ -61,6 +61,21 @@ pub(crate) enum Targets<'a> {
     /// kinematic one: what it meets on the way is pushed in turn, the
     /// pushers carry it, only the rest stops it).
     Blockers(&'a HashSet<RigidBodyHandle>),
+}
+
+impl Targets<'_> {
+    /// Whether `co` is one of these targets.
+    fn wants(&self, co: &Collider, motions: &StepMotions, scene: &StageWorld) -> bool {
+        let parent = co.parent();
+        match *self {
+            Targets::All => true,
+            Targets::Moving => parent.is_some_and(|b| motions.body(b).is_some()),
+            Targets::Only(set) => parent.is_some_and(|b| set.contains(&b)),
+            Targets::Blockers(set) => !parent.is_some_and(|b| {
+                set.contains(&b) || scene.bodies.get(b).is_some_and(|rb| rb.is_dynamic())
+            }),
+        }
+    }
 }
 
 /// What every sweep of one step reads: the world, its broad phase and
@@ -411,6 +426,7 @@ pub(crate) fn sweep_body(
             h1,
             co1,
             &rough,
+            |co2| targets.wants(co2, motions, scene),
             |_, co2| Some(rough_swept_box(motions, co2, scene.bodies)),
             &mut ws.candidates,
         );
@@ -441,18 +457,6 @@ pub(crate) fn sweep_body(
         let mut handles = Vec::new();
         for c in &ws.candidates {
             let co2 = &scene.colliders[c.handle];
-            let parent = co2.parent();
-            let wanted = match targets {
-                Targets::All => true,
-                Targets::Moving => parent.is_some_and(|b| motions.body(b).is_some()),
-                Targets::Only(set) => parent.is_some_and(|b| set.contains(&b)),
-                Targets::Blockers(set) => !parent.is_some_and(|b| {
-                    set.contains(&b) || scene.bodies.get(b).is_some_and(|rb| rb.is_dynamic())
-                }),
-            };
-            if !wanted {
-                continue;
-            }
             let motion2 = ws.motions.get(motions, c.handle, co2, scene.bodies)?;
             match c.interaction {
                 Interaction::Solid => {
