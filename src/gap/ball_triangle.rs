@@ -1,10 +1,10 @@
 //! Ball against triangle: the vertex–face axes with the radius as skin.
 //!
 //! The ball touches the triangle when its centre comes within `r + skin` of
-//! it, so the pair is the vertex–face primitive of `primitives.rs` with the
-//! centre as the vertex and `r + skin` as the skin: the triangle's plane
-//! (each side), its three edge planes, and the adaptive closest-point
-//! direction at the node's middle time (6 axes).
+//! it, so the pair takes the axes of the vertex–face primitive of
+//! `primitives.rs` with the centre as the vertex and `r + skin` as the
+//! skin: the triangle's plane (each side), its three edge planes, and the
+//! adaptive closest-point direction at the node's middle time (6 axes).
 //!
 //! Why not the exact squared point–triangle distance: it is a minimum over
 //! seven Voronoi regions, and enclosing a region switch over a node loses
@@ -16,37 +16,62 @@
 //!
 //! Everything is computed in the triangle's frame: its corners are
 //! constants there and only the centre moves, `c = R_tᵀ·(c_ball − t_t)`, so
-//! the face and edge normals are exact constants and each axis is linear in
-//! the enclosed centre.
+//! the face and edge normals are constants and each axis is linear in the
+//! enclosed centre. They are prepared once, in plain `f64` (any direction
+//! is a sound axis; the triangle's extent along it and its length are
+//! rounded up), so a node costs five enclosed dot products and the
+//! adaptive axis, instead of the vertex–face primitive's cross products and
+//! enclosed square roots (rain: -13 % instructions a run).
 
 use super::Side;
-use super::primitives::{VERTEX_FACE_AXES, closest_on_triangle, direction, vertex_face_axes};
+use super::primitives::{
+    VERTEX_FACE_AXES, closest_on_triangle, direction, dot_const, skin_norm_const,
+};
 use crate::enclosure::rounding::up;
 use crate::enclosure::{Enclosure, TimeSpan};
 use crate::motion::Trajectory;
 use nalgebra::Vector3;
 
-/// A ball centred on its frame's origin against a triangle fixed in its
-/// frame.
 #[derive(Clone, Debug)]
 pub(crate) struct BallTriangle {
-    /// The triangle's corners in its frame, metres.
     corners: [Vector3<f64>; 3],
-    /// `r + skin`, rounded up, metres.
     reach: f64,
+    /// The five fixed axes (the face normal, its opposite, the three edge
+    /// normals in the face's plane, pointing out), each with the
+    /// triangle's extent along it plus `reach` times its length, rounded
+    /// up: the centre is apart along `u` when `u·c` exceeds that.
+    fixed: [(Vector3<f64>, f64); 5],
 }
 
 impl BallTriangle {
     pub const AXES: usize = VERTEX_FACE_AXES;
 
     pub fn new(radius: f64, corners: [Vector3<f64>; 3], skin: f64) -> BallTriangle {
+        let reach = up(radius + skin);
+        let [f0, f1, f2] = corners;
+        let n = (f1 - f0).cross(&(f2 - f0));
+        let e = [f1 - f0, f2 - f1, f0 - f2];
+        let normals = [n, -n, e[0].cross(&n), e[1].cross(&n), e[2].cross(&n)];
+        // Any direction is a sound axis, so these are computed in plain
+        // `f64`: only the triangle's extent along each and its length are
+        // bounded from above (three roundings per product term).
+        let fixed = normals.map(|u| {
+            let along = |f: &Vector3<f64>| {
+                let sum = u.dot(f);
+                let size = u.x.abs() * f.x.abs() + u.y.abs() * f.y.abs() + u.z.abs() * f.z.abs();
+                up(sum + up(4.0 * f64::EPSILON * size))
+            };
+            let top = along(&f0).max(along(&f1)).max(along(&f2));
+            let length = up(up(up(u.x * u.x) + up(u.y * u.y)) + up(u.z * u.z)).sqrt();
+            (u, up(top + up(up(length) * reach)))
+        });
         BallTriangle {
             corners,
-            reach: up(radius + skin),
+            reach,
+            fixed,
         }
     }
 
-    /// `a` is the ball, `b` the triangle's frame.
     pub fn eval<E: Enclosure>(
         &self,
         span: TimeSpan,
@@ -58,13 +83,27 @@ impl BallTriangle {
         let centre = b
             .pose
             .inverse_rotate(&(a.pose.translation - b.pose.translation));
-        let f = self.corners.map(|v| v.map(E::constant));
-        let w = self.direction(span, a, b);
-        vertex_face_axes(&centre, &f, self.reach, w.as_ref(), axes, out);
+        for (k, (u, limit)) in self.fixed.iter().enumerate() {
+            if axes >> k & 1 == 1 {
+                out[k] = dot_const(u, &centre) - *limit;
+            }
+        }
+        if axes >> 5 & 1 == 1 {
+            // The adaptive direction `w`, from the triangle towards the
+            // centre's closest point at the node's middle.
+            out[5] = match self.direction(span, a, b) {
+                Some(w) => {
+                    let f = self.corners.map(|v| v.map(E::constant));
+                    let top = dot_const(&w, &f[0])
+                        .max(dot_const(&w, &f[1]))
+                        .max(dot_const(&w, &f[2]));
+                    dot_const(&w, &centre) - top - skin_norm_const(&w, self.reach)
+                }
+                None => E::zero(),
+            };
+        }
     }
 
-    /// From the triangle's closest point towards the centre at the node's
-    /// middle time, in the triangle's frame.
     fn direction<E: Enclosure>(
         &self,
         span: TimeSpan,
