@@ -184,14 +184,15 @@ pub(crate) fn meets(
 }
 
 /// A box holding collider `co` over the step, from its body's two poses
-/// alone: looser than [`swept_aabb`], but no motion is built for it. Most
-/// fast colliders meet nothing, and their motions cost more than the broad
-/// phase does, so the broad phase is asked with this box first. However
-/// the body turns, the collider stays within its bounding sphere about the
-/// centre of mass, and the centre runs along the segment between its two
-/// positions (plus the bend of an accelerated motion); the margins are
-/// generous, this box only has to hold [`swept_aabb`]'s. A collider of a
-/// body that did not move: its own box.
+/// alone, with no motion built for it: most fast colliders meet nothing,
+/// and their motions cost more than the broad phase does, so the broad
+/// phase is asked with this box first. However the body turns, the
+/// collider stays within its bounding sphere about the centre of mass, and
+/// the centre runs along the segment between its two positions (plus the
+/// bend of an accelerated motion). Across a fast path this is tighter than
+/// [`swept_aabb`] (whose margin is the whole travel), for a slow turn of a
+/// long shape looser; the candidates meet both. A collider of a body that
+/// did not move: its own box.
 pub(crate) fn rough_swept_box(motions: &StepMotions, co: &Collider, bodies: &RigidBodySet) -> Aabb {
     let (Some(m), Some(local), Some(rb)) = (
         co.parent().and_then(|h| motions.body(h)),
