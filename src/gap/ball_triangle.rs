@@ -26,6 +26,7 @@
 use super::Side;
 use super::primitives::{
     VERTEX_FACE_AXES, closest_on_triangle, direction, dot_const, skin_norm_const,
+    vertex_face_adaptive,
 };
 use crate::enclosure::rounding::up;
 use crate::enclosure::{Enclosure, TimeSpan};
@@ -53,8 +54,9 @@ impl BallTriangle {
         let e = [f1 - f0, f2 - f1, f0 - f2];
         let normals = [n, -n, e[0].cross(&n), e[1].cross(&n), e[2].cross(&n)];
         // Any direction is a sound axis, so these are computed in plain
-        // `f64`: only the triangle's extent along each and its length are
-        // bounded from above (three roundings per product term).
+        // `f64`: only the triangle's extent along each (three roundings per
+        // product term) and the skin times its length are bounded from
+        // above.
         let fixed = normals.map(|u| {
             let along = |f: &Vector3<f64>| {
                 let sum = u.dot(f);
@@ -62,8 +64,7 @@ impl BallTriangle {
                 up(sum + up(4.0 * f64::EPSILON * size))
             };
             let top = along(&f0).max(along(&f1)).max(along(&f2));
-            let length = up(up(up(u.x * u.x) + up(u.y * u.y)) + up(u.z * u.z)).sqrt();
-            (u, up(top + up(up(length) * reach)))
+            (u, up(top + skin_norm_const(&u, reach)))
         });
         BallTriangle {
             corners,
@@ -91,16 +92,9 @@ impl BallTriangle {
         if axes >> 5 & 1 == 1 {
             // The adaptive direction `w`, from the triangle towards the
             // centre's closest point at the node's middle.
-            out[5] = match self.direction(span, a, b) {
-                Some(w) => {
-                    let f = self.corners.map(|v| v.map(E::constant));
-                    let top = dot_const(&w, &f[0])
-                        .max(dot_const(&w, &f[1]))
-                        .max(dot_const(&w, &f[2]));
-                    dot_const(&w, &centre) - top - skin_norm_const(&w, self.reach)
-                }
-                None => E::zero(),
-            };
+            let f = self.corners.map(|v| v.map(E::constant));
+            let w = self.direction(span, a, b);
+            out[5] = vertex_face_adaptive(&centre, &f, self.reach, w.as_ref());
         }
     }
 

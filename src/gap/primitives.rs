@@ -122,15 +122,27 @@ pub(crate) fn vertex_face_axes<E: Enclosure>(
         }
     }
     if axes >> 5 & 1 == 1 {
-        out[5] = match w {
-            Some(w) => {
-                let top = dot_const(w, &f[0])
-                    .max(dot_const(w, &f[1]))
-                    .max(dot_const(w, &f[2]));
-                dot_const(w, p) - top - skin_norm_const(w, skin)
-            }
-            None => E::zero(),
-        };
+        out[5] = vertex_face_adaptive(p, f, skin, w);
+    }
+}
+
+/// The vertex–face axis along the adaptive direction `w` (from the
+/// triangle `f` towards `p`): `p`'s height over the triangle's farthest
+/// corner along `w`, less the skin; zero (never apart) without one.
+pub(crate) fn vertex_face_adaptive<E: Enclosure>(
+    p: &Vector3<E>,
+    f: &[Vector3<E>; 3],
+    skin: f64,
+    w: Option<&Vector3<f64>>,
+) -> E {
+    match w {
+        Some(w) => {
+            let top = dot_const(w, &f[0])
+                .max(dot_const(w, &f[1]))
+                .max(dot_const(w, &f[2]));
+            dot_const(w, p) - top - skin_norm_const(w, skin)
+        }
+        None => E::zero(),
     }
 }
 
