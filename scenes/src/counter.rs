@@ -11,6 +11,12 @@
 //!   end pose is;
 //! - a **deep end**: the step starts no deeper than `limit` and ends deeper.
 //!
+//! A pair already more than half `limit` deep at the start counts only when
+//! the step takes it another half `limit` deeper: a contact driven in, not
+//! a resting one wobbling across the line (thin slabs resting on terrain
+//! wobble between 8 and 11 mm deep under rapier's own contacts, step after
+//! step, whatever the CCD).
+//!
 //! Cost is kept down three ways: swept boxes first (O(n²) box tests, fine for
 //! the few hundred colliders of a scene); then the two end poses, whose
 //! signed gaps plus a bound on how far any point moves prove most pairs
@@ -263,6 +269,14 @@ fn contact_gap(
     }
 }
 
+/// The depth a pair starting `depth0` deep must pass to count: `limit`,
+/// or half a limit deeper than it started if that is more (module docs).
+/// `None` for a pair already deeper than `limit` at the start: not this
+/// step's doing.
+fn counted_depth(limit: Real, depth0: Real) -> Option<Real> {
+    (depth0 <= limit).then(|| limit.max(depth0 + 0.5 * limit))
+}
+
 /// Samples one pair over the step.
 fn check_pair(a: &Tracked, b: &Tracked, step: usize) -> Option<ContactEvent> {
     let limit = (0.5 * a.thickness.min(b.thickness)).max(DEPTH_FLOOR);
@@ -273,6 +287,7 @@ fn check_pair(a: &Tracked, b: &Tracked, step: usize) -> Option<ContactEvent> {
     let (gap0, _) = gap_at(a, b, 0.0, prediction)?;
     let (gap1, at1) = gap_at(a, b, 1.0, prediction)?;
     let (depth0, depth1) = (-gap0, -gap1);
+    let limit = counted_depth(limit, depth0)?;
     let event = |kind, depth, t, at| ContactEvent {
         kind,
         step,
@@ -283,9 +298,6 @@ fn check_pair(a: &Tracked, b: &Tracked, step: usize) -> Option<ContactEvent> {
         t,
         at,
     };
-    if depth0 > limit {
-        return None;
-    }
     if depth1 > limit {
         return Some(event(ContactKind::DeepEnd, depth1, 1.0, at1));
     }
@@ -332,5 +344,23 @@ pub fn thickness(shape: &dyn Shape) -> Real {
             let e = aabb.maxs - aabb.mins;
             e.min_element().max(0.0)
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::counted_depth;
+
+    #[test]
+    fn a_resting_pair_counts_only_when_driven_half_a_limit_deeper() {
+        let limit = 0.01;
+        // Apart or shallow at the start: the limit itself.
+        assert_eq!(counted_depth(limit, -0.5), Some(limit));
+        assert_eq!(counted_depth(limit, 0.004), Some(limit));
+        // Resting 9 mm deep: a wobble to 11 mm is not counted, 14.5 mm is.
+        let nine = counted_depth(limit, 0.009).expect("counted");
+        assert!(0.011 < nine && nine < 0.0145, "{nine}");
+        // Already deeper than the limit: never this step's event.
+        assert_eq!(counted_depth(limit, 0.011), None);
     }
 }
