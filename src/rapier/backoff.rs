@@ -201,17 +201,18 @@ pub(crate) fn pair_relative_travel(
     m1.relative_travel_bound(reach(s1), m2, reach(s2))
 }
 
-/// Bound on how much `n·(p − q)` changes over the whole step for any
-/// point `p` of one shape and `q` of the other, metres (their relative
-/// motion along the unit direction `n`).
-pub(crate) fn pair_travel_along(
+/// Bound on how much `n·(p − q)` grows over the whole step for any
+/// point `p` of one shape and `q` of the other, metres: how much deeper
+/// the pair can get along `n` (unit, from the first shape towards the
+/// second). See [`Motion::relative_approach_along`].
+pub(crate) fn pair_approach_along(
     s1: &dyn Shape,
     m1: &Motion,
     s2: &dyn Shape,
     m2: &Motion,
     n: &Vector3<f64>,
 ) -> f64 {
-    m1.relative_travel_along(n, reach(s1), m2, reach(s2))
+    m1.relative_approach_along(n, reach(s1), m2, reach(s2))
 }
 
 /// A hit at the true contact moved back along the motion by `back` metres

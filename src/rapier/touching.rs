@@ -4,7 +4,7 @@
 //! can be, sampled with parry's contact otherwise (see [`touching_pair`]).
 
 use super::backoff::{
-    BACKOFF, HandBack, back_off, pair_relative_travel, pair_travel, pair_travel_along, roundings,
+    BACKOFF, HandBack, back_off, pair_approach_along, pair_relative_travel, pair_travel, roundings,
     stop_before_gap, stop_when_deep,
 };
 use super::report::CcdReport;
@@ -86,11 +86,11 @@ pub(super) fn touching_pair(
     let convex_start = contact0.as_ref().filter(|_| convex);
     if let Some(c) = convex_start {
         // The depth is at most the overlap along the start normal, which
-        // starts at `-gap0` and grows no faster than the pair travels
-        // along it. A body sliding or resting on it is done here, without
-        // a query.
-        let along = pair_travel_along(s1, m1, s2, m2, &vec_from_glam(c.normal1));
-        if along <= allowed + gap0 {
+        // starts at `-gap0` and grows no faster than the pair approaches
+        // along it. A body sliding or resting on it, or bouncing off it,
+        // is done here, without a query.
+        let normal = vec_from_glam(c.normal1).normalize();
+        if pair_approach_along(s1, m1, s2, m2, &normal) <= allowed + gap0 {
             return Ok(None);
         }
     }
