@@ -322,10 +322,28 @@ impl Solver {
                 // narrow enough, else look there first (the bracket shrinks
                 // quadratically near a simple root; the calibration's "split next
                 // to the left end", guarded by certainty).
-                if sure - clipped.lo <= options.epsilon {
+                let bracket = sure - clipped.lo;
+                if bracket <= options.epsilon {
                     return Ok(hit(clipped.lo, node.earliest_pair, stats));
                 }
-                self.push_halves(clipped, sure, start, end);
+                // A bracket that kept most of the node is halved as well:
+                // where the gap closes slowly (a grazing or sliding pair)
+                // the confirmed time creeps towards the root by a few
+                // percent per node while the start never moves (false
+                // position's one-sided convergence), up to 150 nodes where
+                // halving needs 20.
+                let mid = clipped.lo + 0.5 * bracket;
+                let halve = bracket >= RECLIP_SHARE * frame.span.width();
+                if halve && clipped.lo < mid && mid < sure {
+                    self.stack.push(Frame {
+                        span: TimeSpan::new(sure, clipped.hi),
+                        start,
+                        end,
+                    });
+                    self.push_halves(TimeSpan::new(clipped.lo, sure), mid, start, end);
+                } else {
+                    self.push_halves(clipped, sure, start, end);
+                }
                 continue;
             }
             if clipped.width() < RECLIP_SHARE * frame.span.width() {
