@@ -57,6 +57,7 @@ use crate::motion::{Motion, Pose};
 use nalgebra::Vector3;
 use rapier3d::parry::math::Vector;
 use rapier3d::parry::shape::{Ball, Segment, Shape, Triangle, TypedShape};
+use std::sync::Arc;
 
 /// One shape of a pair as an axis function sees it on a node.
 pub(crate) struct Side<'p, E: Enclosure> {
@@ -152,10 +153,49 @@ pub(crate) struct Built {
     pub swapped: bool,
 }
 
+/// A whole convex shape read once for many pairs: the families' core and
+/// border, and parry's copy for the direction hint. A composite's parts
+/// meet the same convex shape again and again (a hull over a mesh:
+/// hundreds of triangle pairs), and reading a hull copies its vertices
+/// twice.
+#[derive(Clone)]
+pub(crate) struct Prepared {
+    convex: Convex,
+    shape: Arc<dyn Shape>,
+}
+
+impl Prepared {
+    /// `None` for a shape that is not a bounded convex one.
+    pub fn of(shape: &dyn Shape) -> Result<Option<Prepared>, CcdError> {
+        Ok(Convex::from_shape(shape)?.map(|convex| Prepared {
+            convex,
+            shape: Arc::from(shape.clone_dyn()),
+        }))
+    }
+}
+
 /// The gap for `shape1` against `shape2` with the given skin (metres), or
 /// `Unsupported` for a pair of kinds no family handles.
 pub(crate) fn build(shape1: &dyn Shape, shape2: &dyn Shape, skin: f64) -> Result<Built, CcdError> {
+    build_prepared((shape1, None), (shape2, None), skin)
+}
+
+/// [`build`], with either shape already read ([`Prepared::of`] on the same
+/// shape).
+pub(crate) fn build_prepared(
+    (shape1, prepared1): (&dyn Shape, Option<&Prepared>),
+    (shape2, prepared2): (&dyn Shape, Option<&Prepared>),
+    skin: f64,
+) -> Result<Built, CcdError> {
     use TypedShape as T;
+    let convex = |shape: &dyn Shape, prepared: Option<&Prepared>| match prepared {
+        Some(p) => Ok(Some(p.convex.clone())),
+        None => Convex::from_shape(shape),
+    };
+    let shared = |shape: &dyn Shape, prepared: Option<&Prepared>| match prepared {
+        Some(p) => p.shape.clone(),
+        None => Arc::from(shape.clone_dyn()),
+    };
     let straight = |gap| {
         Ok(Built {
             gap,
@@ -184,7 +224,7 @@ pub(crate) fn build(shape1: &dyn Shape, shape2: &dyn Shape, skin: f64) -> Result
             Some(c) => mirrored(PairGap::HalfSpace(half_space(h, c, skin)?)),
             None => unsupported(shape1, shape2),
         },
-        _ => match (Convex::from_shape(shape1)?, Convex::from_shape(shape2)?) {
+        _ => match (convex(shape1, prepared1)?, convex(shape2, prepared2)?) {
             (Some(c1), Some(c2)) => match (&c1.core, &c2.core) {
                 (Core::Point, Core::Cuboid(h)) => straight(PairGap::BallCuboid(BallCuboid::new(
                     c1.border, *h, c2.border, skin,
@@ -213,7 +253,11 @@ pub(crate) fn build(shape1: &dyn Shape, shape2: &dyn Shape, skin: f64) -> Result
                     mirrored(PairGap::CuboidTriangle(CuboidTriangle::new(*h, *t)))
                 }
                 _ => straight(PairGap::SupportMap(SupportMap::new(
-                    c1, shape1, c2, shape2, skin,
+                    c1,
+                    shared(shape1, prepared1),
+                    c2,
+                    shared(shape2, prepared2),
+                    skin,
                 ))),
             },
             _ => unsupported(shape1, shape2),

@@ -93,9 +93,9 @@ impl SupportMap {
 
     pub fn new(
         a: Convex,
-        shape_a: &dyn Shape,
+        shape_a: Arc<dyn Shape>,
         b: Convex,
-        shape_b: &dyn Shape,
+        shape_b: Arc<dyn Shape>,
         skin: f64,
     ) -> SupportMap {
         let pad = up(ORTHO_SLACK * up(up(a.extent() + b.extent()) + skin));
@@ -105,8 +105,8 @@ impl SupportMap {
             face_b: face_normal(&b),
             a,
             b,
-            shape_a: Arc::from(shape_a.clone_dyn()),
-            shape_b: Arc::from(shape_b.clone_dyn()),
+            shape_a,
+            shape_b,
             skin: up(skin + pad),
             last: Cell::new(None),
             closed_form,

@@ -6,6 +6,7 @@ use crate::error::CcdError;
 use crate::gap::composite::{self, PairSide, Region, SubRegion};
 use crate::gap::{self, PairGap, Side};
 use crate::solve::{GapSet, SolveOptions, SolveOutcome, Solver};
+use rapier3d::parry::shape::Shape;
 
 /// One search over a query's pairs, in whichever arithmetic the query
 /// chose: the outcome and the caller's (moving, target) indices of the pair
@@ -52,6 +53,7 @@ impl InArithmetic for Search<'_, '_> {
             pairs,
             skin,
             scratch: Vec::new(),
+            prepared: Vec::new(),
             error: None,
         };
         let outcome = solver.solve(&mut set, options)?;
@@ -116,6 +118,10 @@ struct PairSet<'s, E: Enclosure> {
     initial: usize,
     skin: f64,
     scratch: Vec<SubRegion<'s>>,
+    /// Whole shapes that composite children pair with, read once
+    /// ([`gap::Prepared`]), by the shape's address (the shapes are borrowed
+    /// for the whole query, so an address names one shape).
+    prepared: Vec<(usize, Option<gap::Prepared>)>,
     error: Option<CcdError>,
 }
 
@@ -123,13 +129,19 @@ impl<'s, E: Enclosure> PairSet<'s, E> {
     /// A new pair between two items, in this order; returns its id.
     fn make_pair(&mut self, a: PairSide<'s>, b: PairSide<'s>, moving: usize, target: usize) -> u32 {
         let kind = match (a.part.shape(), b.part.shape()) {
-            (Some(sa), Some(sb)) => match gap::build(sa, sb, self.skin) {
-                Ok(built) => PairContent::Leaf(built.gap, built.swapped),
-                Err(e) => {
-                    self.error.get_or_insert(e);
-                    PairContent::Broken
+            (Some(sa), Some(sb)) => {
+                let built = self.prepared(&a.part).and_then(|pa| {
+                    let pb = self.prepared(&b.part)?;
+                    gap::build_prepared((sa, pa.as_ref()), (sb, pb.as_ref()), self.skin)
+                });
+                match built {
+                    Ok(built) => PairContent::Leaf(built.gap, built.swapped),
+                    Err(e) => {
+                        self.error.get_or_insert(e);
+                        PairContent::Broken
+                    }
                 }
-            },
+            }
             _ => PairContent::Composite(CompositePair::new(a, b)),
         };
         self.pairs.push(PairEntry {
@@ -140,6 +152,22 @@ impl<'s, E: Enclosure> PairSet<'s, E> {
             target,
         });
         (self.pairs.len() - 1) as u32
+    }
+
+    /// A whole shape of the query, read once ([`gap::Prepared`]); `None`
+    /// for a composite's own parts (made on the fly) and for shapes that
+    /// are not bounded convex ones.
+    fn prepared(&mut self, part: &Region<'s>) -> Result<Option<gap::Prepared>, CcdError> {
+        let Region::Shape(shape) = *part else {
+            return Ok(None);
+        };
+        let key = shape as *const dyn Shape as *const () as usize;
+        if let Some((_, p)) = self.prepared.iter().find(|(k, _)| *k == key) {
+            return Ok(p.clone());
+        }
+        let p = gap::Prepared::of(shape)?;
+        self.prepared.push((key, p.clone()));
+        Ok(p)
     }
 }
 
