@@ -25,7 +25,8 @@
 //! 2. fixed in `b`'s frame: `n(τ) = R_b(τ)·k`, `k = R_b(mid)ᵀn`.
 //!
 //! Cost: one closest-points computation per node (parry's GJK, and EPA
-//! when overlapping, unless the closed form applies) plus some 60
+//! when overlapping on a node, not at a single time, unless the closed
+//! form applies) plus some 60
 //! enclosure products and the support functions; a node that axis 0
 //! proves apart skips the other two. Where the direction is parry's, the
 //! last node's direction is tried first, and a node it proves apart needs
@@ -38,7 +39,8 @@ use crate::enclosure::rounding::up;
 use crate::enclosure::{Enclosure, TimeSpan};
 use crate::motion::Trajectory;
 use nalgebra::{Isometry3, Vector3};
-use rapier3d::parry::math::Pose as ParryPose;
+use rapier3d::parry::math::{Pose as ParryPose, Vector};
+use rapier3d::parry::query::gjk::{self, CsoPoint, GJKResult, VoronoiSimplex};
 use rapier3d::parry::shape::Shape;
 use std::cell::Cell;
 use std::fmt;
@@ -116,12 +118,42 @@ impl SupportMap {
     /// A unit direction from `a` towards `b`, in `a`'s frame, at the poses
     /// `ia`, `ib`. Never fails: when parry has no answer, the direction of
     /// the frames' origins, or any axis.
-    fn direction(&self, ia: &Isometry3<f64>, ib: &Isometry3<f64>) -> Vector3<f64> {
+    ///
+    /// Without `depth` (a single time, where the search only asks whether
+    /// the shapes touch) overlapping shapes take the last direction instead
+    /// of parry's penetration normal: along every direction overlapping
+    /// shapes show as touching (the penetration normal is the one along
+    /// which they overlap *least*), and that normal's EPA was most of the
+    /// cost of a cylinder query.
+    fn direction(&self, ia: &Isometry3<f64>, ib: &Isometry3<f64>, depth: bool) -> Vector3<f64> {
         let rel = ia.inv_mul(ib);
         if let Some(n) = core_direction(&self.a.core, &self.b.core, &rel) {
             return n;
         }
         let pos12 = pose_from_iso(&rel);
+        let support_maps = (self.shape_a.as_support_map(), self.shape_b.as_support_map());
+        if !depth && let (Some(g1), Some(g2)) = support_maps {
+            let closest = || {
+                let start = pos12.translation.try_normalize().unwrap_or(Vector::X);
+                let mut simplex = VoronoiSimplex::new();
+                simplex.reset(CsoPoint::from_shapes(&pos12, g1, g2, start));
+                gjk::closest_points(&pos12, g1, g2, PREDICTION, true, &mut simplex)
+            };
+            // As below: a panic in parry only costs the hint.
+            match std::panic::catch_unwind(std::panic::AssertUnwindSafe(closest)) {
+                Ok(GJKResult::ClosestPoints(_, _, n)) => {
+                    if let Some(n) = vec_from_glam(n).try_normalize(1.0e-6) {
+                        return n;
+                    }
+                }
+                Ok(GJKResult::Intersection) => {
+                    if let Some(last) = self.last.get() {
+                        return last;
+                    }
+                }
+                _ => {}
+            }
+        }
         let query = || {
             rapier3d::parry::query::contact(
                 &ParryPose::IDENTITY,
@@ -180,7 +212,7 @@ impl SupportMap {
                 return;
             }
         }
-        let m = self.direction(&ia, &ib);
+        let m = self.direction(&ia, &ib, span.lo < span.hi);
         self.last.set(Some(m));
         let n = ia.rotation * m;
         if axes & 1 != 0 {
@@ -396,8 +428,57 @@ fn face_normal(c: &Convex) -> Option<Vector3<f64>> {
 
 #[cfg(test)]
 mod tests {
-    use super::segment_box;
-    use nalgebra::Vector3;
+    use super::*;
+    use crate::enclosure::Affine;
+    use crate::motion::Motion;
+    use nalgebra::Translation3;
+    use rapier3d::parry::shape::{Cuboid, Cylinder};
+
+    /// A cylinder over a box, `gap` metres above it (negative: sunk in),
+    /// both still; the axes at one time, with `last` as the last node's
+    /// direction (in the cylinder's frame).
+    fn axes_at_a_time(gap: f64, last: Vector3<f64>) -> [Affine; 3] {
+        let (cylinder, cuboid) = (Cylinder::new(0.5, 0.3), Cuboid::new(Vector::splat(1.0)));
+        let convex = |s: &dyn Shape| Convex::from_shape(s).unwrap().unwrap();
+        let pair = SupportMap::new(
+            convex(&cylinder),
+            Arc::new(cylinder),
+            convex(&cuboid),
+            Arc::new(cuboid),
+            0.0,
+        );
+        pair.last.set(Some(last));
+        let still = |y: f64| Motion::fixed(Translation3::new(0.1, y, 0.2).into()).unwrap();
+        let (ma, mb) = (still(1.5 + gap), still(0.0));
+        let span = TimeSpan::new(0.5, 0.5);
+        let (pa, pb) = (ma.pose(span), mb.pose(span));
+        let (a, b) = (
+            Side {
+                pose: &pa,
+                motion: &ma,
+            },
+            Side {
+                pose: &pb,
+                motion: &mb,
+            },
+        );
+        let mut out = [Affine::constant(0.0); 3];
+        pair.eval(span, &a, &b, 0b111, &mut out);
+        out
+    }
+
+    /// At a single time overlapping shapes show as touching along the last
+    /// direction, however poor, and shapes apart show as apart: that time
+    /// needs no penetration normal.
+    #[test]
+    fn a_single_time_is_judged_without_the_penetration_normal() {
+        let poor = Vector3::new(1.0, 0.2, -0.3).normalize();
+        for out in [axes_at_a_time(-0.01, poor), axes_at_a_time(-1.0e-5, poor)] {
+            assert!(out.iter().all(|x| x.range().hi <= 0.0), "{out:?}");
+        }
+        let apart = axes_at_a_time(0.01, poor);
+        assert!(apart.iter().any(|x| x.range().lo > 0.009), "{apart:?}");
+    }
 
     /// Against dense sampling of the segment, on segments nearly parallel
     /// to a face (where alternating projections stalled), crossing
