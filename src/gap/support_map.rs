@@ -131,8 +131,10 @@ impl SupportMap {
             return n;
         }
         let pos12 = pose_from_iso(&rel);
-        let support_maps = (self.shape_a.as_support_map(), self.shape_b.as_support_map());
-        if !depth && let (Some(g1), Some(g2)) = support_maps {
+        if !depth
+            && let (Some(g1), Some(g2)) =
+                (self.shape_a.as_support_map(), self.shape_b.as_support_map())
+        {
             let closest = || {
                 let start = pos12.translation.try_normalize().unwrap_or(Vector::X);
                 let mut simplex = VoronoiSimplex::new();
