@@ -54,6 +54,15 @@ pub trait GapSet<E: Enclosure> {
         false
     }
 
+    /// The widest node (a fraction of the step) whose evaluation can
+    /// usually prove something: a wider node that must be split is cut
+    /// straight into pieces this wide instead of halves. Only a hint for
+    /// speed (every piece is searched, earlier first); the default, and any
+    /// value that is not positive and finite, means no limit.
+    fn useful_width(&self) -> f64 {
+        f64::INFINITY
+    }
+
     /// A composite pair (a shape against a mesh, say) may stand for many
     /// sub-pairs. When `pair` is one and was not proved apart on `span`, push
     /// the numbers of the sub-pairs that may touch on `span` into `out` and
@@ -201,6 +210,18 @@ const RECLIP_SHARE: f64 = 0.6;
 /// grazes (its gap stays within rounding of zero) and the node's start is
 /// reported.
 const FLOOR_SHARE: f64 = 1.0 / 64.0;
+
+/// The most pieces one node is cut into at once.
+const MAX_PIECES: usize = 32;
+
+/// How many pieces a node `width` wide is cut into when the gap set finds
+/// nodes wider than `useful` of little use (2, a halving, when it does not).
+fn pieces_for(width: f64, useful: f64) -> usize {
+    if !(useful > 0.0 && useful.is_finite()) || width <= 2.0 * useful {
+        return 2;
+    }
+    ((width / useful).ceil() as usize).clamp(2, MAX_PIECES)
+}
 
 /// Reusable buffers for searches; keep one per thread and call
 /// [`Solver::solve`] as often as needed.
@@ -359,7 +380,12 @@ impl Solver {
                 // No float between the ends: the node cannot be split.
                 return Ok(hit(clipped.lo, node.earliest_pair, stats));
             }
-            self.push_halves(clipped, mid, start, end);
+            let pieces = pieces_for(clipped.width(), gaps.useful_width());
+            if pieces > 2 {
+                self.push_pieces(clipped, pieces, start, end);
+            } else {
+                self.push_halves(clipped, mid, start, end);
+            }
         }
         Ok(SolveOutcome {
             status: RootStatus::Separated,
@@ -400,6 +426,28 @@ impl Solver {
                 start,
                 end,
             });
+        }
+    }
+
+    /// Push `span` cut into `pieces` equal parts, the earliest on top; the
+    /// cuts are taken from the ends so the parts cover `span` exactly.
+    fn push_pieces(&mut self, span: TimeSpan, pieces: usize, start: usize, end: usize) {
+        let cut = |k: usize| {
+            if k == pieces {
+                span.hi
+            } else {
+                span.lo + span.width() * (k as f64 / pieces as f64)
+            }
+        };
+        for k in (0..pieces).rev() {
+            let (lo, hi) = (cut(k), cut(k + 1));
+            if lo < hi {
+                self.stack.push(Frame {
+                    span: TimeSpan::new(lo, hi),
+                    start,
+                    end,
+                });
+            }
         }
     }
 

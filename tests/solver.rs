@@ -265,6 +265,8 @@ fn balls_on_spinning_bodies_match_dense_sampling() {
 struct PolySet {
     /// pairs → axes → coefficients of τ⁰, τ¹, τ², τ³.
     pairs: Vec<Vec<[f64; 4]>>,
+    /// What the set answers for `GapSet::useful_width`.
+    useful: f64,
 }
 
 impl PolySet {
@@ -318,6 +320,9 @@ impl<E: Enclosure> GapSet<E> for PolySet {
     fn is_exact(&self, _pair: usize) -> bool {
         true // the axes are the functions themselves
     }
+    fn useful_width(&self) -> f64 {
+        self.useful
+    }
     fn eval(&mut self, pair: usize, span: TimeSpan, axes: u64, out: &mut [E]) {
         let t = E::time(span);
         for (k, c) in self.pairs[pair].iter().enumerate() {
@@ -350,7 +355,14 @@ fn and_or_sets_match_brute_force() {
                     .collect()
             })
             .collect();
-        let mut set = PolySet { pairs };
+        // Every other case cuts wide nodes straight into pieces (what a
+        // fast-turning pair asks for), as narrow as 1/300 of the step.
+        let useful = if case % 2 == 0 {
+            f64::INFINITY
+        } else {
+            rng.range(0.003, 0.4)
+        };
+        let mut set = PolySet { pairs, useful };
         let truth = set.brute_force(samples);
         for kind in Arithmetic::ALL {
             let options = SolveOptions {
@@ -413,6 +425,7 @@ fn and_or_sets_match_brute_force() {
 #[test]
 fn budget_exhaustion_is_conservative() {
     let mut set = PolySet {
+        useful: f64::INFINITY,
         // Touches zero only at τ = 0.7 (a double root): hard to exclude.
         pairs: vec![vec![[0.49, -1.4, 1.0, 0.0]]],
     };
@@ -434,6 +447,7 @@ fn budget_exhaustion_is_conservative() {
 #[test]
 fn bad_parameters_are_typed_errors() {
     let mut set = PolySet {
+        useful: f64::INFINITY,
         pairs: vec![vec![[1.0, 0.0, 0.0, 0.0]]],
     };
     for eps in [0.0, -1.0, f64::NAN, 2.0] {
@@ -455,6 +469,7 @@ fn bad_parameters_are_typed_errors() {
 fn initial_contacts_are_reported_or_left_out() {
     use affine_ccd::InitialContact;
     let mut set = PolySet {
+        useful: f64::INFINITY,
         pairs: vec![
             // Touching from the start (−0.1 + 0.05τ stays ≤ 0).
             vec![[-0.1, 0.05, 0.0, 0.0]],

@@ -47,7 +47,22 @@ impl InArithmetic for Search<'_, '_> {
             rotation_read[pair.a as usize] |= a;
             rotation_read[pair.b as usize] |= b;
         }
+        // The most the two sides of a pair turn against each other over the
+        // step, radians (sides whose rotation no pair reads count 0).
+        let turn = |f: u32| {
+            let f = f as usize;
+            if rotation_read[f] {
+                frames[f].motion.rotation().norm()
+            } else {
+                0.0
+            }
+        };
+        let widest_turn = pairs
+            .iter()
+            .map(|p| turn(p.a) + turn(p.b))
+            .fold(0.0, f64::max);
         let mut set = PairSet::<E> {
+            widest_turn,
             frames: Frames::new(frames, rotation_read),
             initial: pairs.len(),
             pairs,
@@ -108,12 +123,21 @@ pub(super) struct PairEntry<'s> {
     pub target: usize,
 }
 
+/// The most a pair's sides turn against each other over a node worth
+/// evaluating, radians: over wider turns the enclosures of the turned
+/// shapes are too loose to prove a close pair apart. Measured on the
+/// accuracy cases (instructions per batch): 0.35–0.5 rad is best at
+/// ordinary spins and at 200–1000 rad/s alike; 1 rad keeps half the gain.
+const TURN_PER_NODE: f64 = 0.5;
+
 /// The pairs of a query as the solver sees them: the caller's pairs first,
 /// then the pairs that splitting composites creates during the search (an
 /// arena that only grows within a query; each child pair is made once per
 /// parent and child). Poses come from the shared [`Frames`].
 struct PairSet<'s, E: Enclosure> {
     frames: Frames<E>,
+    /// The largest relative turn of a pair's sides over the step, radians.
+    widest_turn: f64,
     pairs: Vec<PairEntry<'s>>,
     initial: usize,
     skin: f64,
@@ -190,6 +214,15 @@ impl<E: Enclosure> GapSet<E> for PairSet<'_, E> {
 
     fn begin_node(&mut self, _span: TimeSpan) {
         self.frames.begin_node();
+    }
+
+    /// A node over which the sides turn by more than [`TURN_PER_NODE`]
+    /// against each other encloses the turned shapes too loosely to prove
+    /// anything close: the solver cuts it straight into pieces that turn
+    /// less (a 1000 rad/s blade turns 17 rad in a step; halving would
+    /// evaluate five levels of useless nodes on the way down).
+    fn useful_width(&self) -> f64 {
+        TURN_PER_NODE / self.widest_turn
     }
 
     fn eval(&mut self, pair: usize, span: TimeSpan, axes: u64, out: &mut [E]) {
