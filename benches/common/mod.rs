@@ -145,10 +145,49 @@ fn motion_pair(
     (ours, parry)
 }
 
+/// How fast the cases' shapes turn.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Spin {
+    /// Each component of the angular velocity uniform in ±50 rad/s.
+    Ordinary,
+    /// 200–1000 rad/s about a random axis (a blade, a drill bit, a
+    /// propeller): up to 17 rad, over two and a half turns, in one step.
+    Fast,
+}
+
+impl Spin {
+    /// An angular velocity of this kind, rad/s.
+    fn sample(self, rng: &mut Rng) -> Vector3<f64> {
+        match self {
+            Spin::Ordinary => rng.vector(50.0),
+            Spin::Fast => {
+                let axis = rng
+                    .vector(1.0)
+                    .try_normalize(1.0e-6)
+                    .unwrap_or(Vector3::y());
+                axis * rng.range(200.0, 1000.0)
+            }
+        }
+    }
+
+    /// The name benches and reports give the case set.
+    pub fn label(self) -> &'static str {
+        match self {
+            Spin::Ordinary => "",
+            Spin::Fast => "fast-spin",
+        }
+    }
+}
+
 /// `n` seeded cases of `kind` the crate supports: linear speed ≤ 100 m/s,
 /// angular ≤ 50 rad/s, dt = 1/60 s, half with both shapes moving, the
 /// first shape aimed near the second so that about half of them hit.
 pub fn cases(kind: &PairKind, n: usize, seed: u64) -> Vec<Case> {
+    cases_spinning(kind, n, seed, Spin::Ordinary)
+}
+
+/// As [`cases`], with the shapes turning as `spin` says.
+pub fn cases_spinning(kind: &PairKind, n: usize, seed: u64, spin: Spin) -> Vec<Case> {
     let mut rng = Rng::new(seed);
     let mut out = Vec::with_capacity(n);
     let mut tries = 0;
@@ -171,12 +210,12 @@ pub fn cases(kind: &PairKind, n: usize, seed: u64) -> Vec<Case> {
             start1,
             Point3::from(from + rng.vector(0.05)),
             v1,
-            rng.vector(50.0),
+            spin.sample(&mut rng),
         );
         let both = out.len() % 2 == 1;
         let start2 = Isometry3::from_parts(Translation3::from(target), rng.rotation());
         let (v2, w2) = if both {
-            (rng.vector(30.0), rng.vector(50.0))
+            (rng.vector(30.0), spin.sample(&mut rng))
         } else {
             (Vector3::zeros(), Vector3::zeros())
         };
