@@ -12,7 +12,7 @@
 mod common;
 
 use affine_ccd::Arithmetic;
-use affine_ccd::query::{QueryOptions, time_of_impact};
+use affine_ccd::query::QueryOptions;
 use common::{Case, pair_kinds, parry_nonlinear, parry_sweep};
 use std::fmt::Write as _;
 use std::time::Instant;
@@ -216,15 +216,7 @@ fn timed_query(
     case: &Case,
     options: &QueryOptions,
 ) -> (Result<Option<affine_ccd::Toi>, affine_ccd::CcdError>, f64) {
-    fastest(|| {
-        time_of_impact(
-            case.shape1.as_ref(),
-            &case.motion1,
-            case.shape2.as_ref(),
-            &case.motion2,
-            options,
-        )
-    })
+    fastest(|| common::affine(case, options))
 }
 
 /// One markdown row: affine at ε = 1e-4 and parry's two methods on the

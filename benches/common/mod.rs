@@ -246,6 +246,20 @@ pub fn cases_spinning(kind: &PairKind, n: usize, seed: u64, spin: Spin) -> Vec<C
     out
 }
 
+/// affine-ccd's `time_of_impact` on the case.
+pub fn affine(
+    case: &Case,
+    options: &query::QueryOptions,
+) -> Result<Option<affine_ccd::Toi>, affine_ccd::CcdError> {
+    query::time_of_impact(
+        case.shape1.as_ref(),
+        &case.motion1,
+        case.shape2.as_ref(),
+        &case.motion2,
+        options,
+    )
+}
+
 /// parry's `cast_shapes_nonlinear` on the case: the fraction of the step,
 /// `None` for no hit, `Err` when parry does not support the pair.
 pub fn parry_nonlinear(case: &Case) -> Result<Option<f64>, ()> {

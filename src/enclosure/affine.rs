@@ -247,7 +247,7 @@ impl Enclosure for Affine {
     fn sqrt(self) -> Result<Affine, CcdError> {
         let range = self.range();
         let whole = range.sqrt()?;
-        if !(range.lo > 0.0) || !range.is_bounded() {
+        if range.lo.is_nan() || range.lo <= 0.0 || !range.is_bounded() {
             return Ok(Affine::from_interval(whole));
         }
         let root_c = self.c.sqrt();
