@@ -19,9 +19,8 @@ mod common;
 use affine_ccd::Arithmetic;
 use affine_ccd::query::QueryOptions;
 use common::{Case, Spin, TRUTH_SAMPLES, pair_kinds, parry_nonlinear, parry_sweep};
-use criterion::{BenchmarkId, Criterion, criterion_group};
+use criterion::{BenchmarkId, Criterion};
 use std::hint::black_box;
-use std::sync::Mutex;
 use std::time::{Duration, SystemTime};
 
 /// Cases per pair kind and batch.
@@ -57,13 +56,11 @@ impl Fared {
 /// One printed row: a batch's group and how each method fared on it.
 struct Row {
     group: String,
-    hits: usize,
+    /// Cases whose sampled truth has a contact.
+    contacts: usize,
     affine: Fared,
     nonlinear: Option<Fared>,
 }
-
-/// The rows of the batches measured in this run, for the final table.
-static ROWS: Mutex<Vec<Row>> = Mutex::new(Vec::new());
 
 /// One of parry's methods on a case (see `common`).
 type Peer = fn(&Case) -> Result<Option<f64>, ()>;
@@ -79,16 +76,18 @@ fn affine_toi(case: &Case, options: &QueryOptions) -> Option<f64> {
 fn run_affine(cases: &[Case], options: &QueryOptions) -> usize {
     cases
         .iter()
-        .filter(|c| matches!(common::affine(c, options), Ok(Some(_))))
+        .filter(|c| affine_toi(c, options).is_some())
         .count()
 }
 
-fn queries(c: &mut Criterion) {
+/// Benchmarks every batch; returns the rows of the final table.
+fn queries(c: &mut Criterion) -> Vec<Row> {
+    let mut rows = Vec::new();
     for spin in [Spin::Ordinary, Spin::Fast] {
         for (k, kind) in pair_kinds().iter().enumerate() {
             let group = match spin {
                 Spin::Ordinary => kind.name.to_string(),
-                Spin::Fast => format!("{}-{}", kind.name, spin.label()),
+                Spin::Fast => format!("{}-fast-spin", kind.name),
             };
             let cases = common::cases_spinning(kind, BATCH, 1000 + k as u64, spin);
             if cases.is_empty() {
@@ -100,9 +99,9 @@ fn queries(c: &mut Criterion) {
                 ..QueryOptions::default()
             };
             let has_nonlinear = parry_nonlinear(&cases[0]).is_ok();
-            ROWS.lock().expect("not poisoned").push(Row {
+            rows.push(Row {
                 group: group.clone(),
-                hits: cases
+                contacts: cases
                     .iter()
                     .filter(|c| c.truth.first_contact.is_some())
                     .count(),
@@ -155,6 +154,7 @@ fn queries(c: &mut Criterion) {
             group.finish();
         }
     }
+    rows
 }
 
 /// criterion's median estimate of one benchmark, in ns per batch, if it
@@ -173,7 +173,7 @@ fn median_ns(group: &str, path: &str, since: SystemTime) -> Option<f64> {
 }
 
 /// The ratios the issue asks for, one row per batch measured.
-fn print_ratios(since: SystemTime) {
+fn print_ratios(rows: &[Row], since: SystemTime) {
     println!(
         "\nper query, ε = 1e-4, medians of criterion's samples (µs per query); \
          missed/late: of the batch's contacts in the sampled truth"
@@ -192,7 +192,7 @@ fn print_ratios(since: SystemTime) {
     let per_query = |ns: f64| ns / 1.0e3 / BATCH as f64;
     let fared =
         |f: Option<Fared>| f.map_or("n/a".to_string(), |f| format!("{}/{}", f.missed, f.late));
-    for row in ROWS.lock().expect("not poisoned").iter() {
+    for row in rows {
         let Some(affine) = median_ns(&row.group, "affine/1e-4", since) else {
             continue;
         };
@@ -203,7 +203,7 @@ fn print_ratios(since: SystemTime) {
         println!(
             "{:<26} {:>9} {:>9.2} {:>10} {:>10} {:>11} {:>14} {:>12}",
             row.group,
-            row.hits,
+            row.contacts,
             per_query(affine),
             fared(Some(row.affine)),
             show(nonlinear),
@@ -214,11 +214,12 @@ fn print_ratios(since: SystemTime) {
     }
 }
 
-criterion_group!(benches, queries);
-
+/// What criterion's `criterion_group!`/`criterion_main!` would do, keeping
+/// the rows for the table.
 fn main() {
     let since = SystemTime::now();
-    benches();
-    Criterion::default().configure_from_args().final_summary();
-    print_ratios(since);
+    let mut criterion = Criterion::default().configure_from_args();
+    let rows = queries(&mut criterion);
+    criterion.final_summary();
+    print_ratios(&rows, since);
 }

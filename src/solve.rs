@@ -381,11 +381,7 @@ impl Solver {
                 return Ok(hit(clipped.lo, node.earliest_pair, stats));
             }
             let pieces = pieces_for(clipped.width(), gaps.useful_width());
-            if pieces > 2 {
-                self.push_pieces(clipped, pieces, start, end);
-            } else {
-                self.push_halves(clipped, mid, start, end);
-            }
+            self.push_pieces(clipped, pieces, start, end);
         }
         Ok(SolveOutcome {
             status: RootStatus::Separated,
@@ -430,7 +426,8 @@ impl Solver {
     }
 
     /// Push `span` cut into `pieces` equal parts, the earliest on top; the
-    /// cuts are taken from the ends so the parts cover `span` exactly.
+    /// cuts are taken from the ends so the parts cover `span` exactly (two
+    /// pieces: the halves at `span.lo + 0.5·span.width()`).
     fn push_pieces(&mut self, span: TimeSpan, pieces: usize, start: usize, end: usize) {
         let cut = |k: usize| {
             if k == pieces {

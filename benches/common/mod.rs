@@ -169,14 +169,6 @@ impl Spin {
             }
         }
     }
-
-    /// The name benches and reports give the case set.
-    pub fn label(self) -> &'static str {
-        match self {
-            Spin::Ordinary => "",
-            Spin::Fast => "fast-spin",
-        }
-    }
 }
 
 /// `n` seeded cases of `kind` the crate supports: linear speed ≤ 100 m/s,

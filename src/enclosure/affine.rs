@@ -264,11 +264,7 @@ impl Enclosure for Affine {
         // and the sums below.
         let slack = (root_c + s.abs() + r + gap) * (16.0 * f64::EPSILON) + f64::MIN_POSITIVE;
         let root = Affine::checked(root_c - 0.5 * gap, s, bound(r + 0.5 * gap + slack));
-        Ok(if root.range().width() <= 2.0 * whole.width() {
-            root
-        } else {
-            Affine::from_interval(whole)
-        })
+        Ok(series::prefer_series(root, Affine::from_interval(whole)))
     }
 
     fn recip(self) -> Result<Affine, CcdError> {

@@ -46,7 +46,7 @@ fn expand_about<E: Enclosure>(delta: E, dmax: f64, coefs: &[Interval], rem: Inte
 /// convergence test in `tests/enclosure.rs`). The series' excess width
 /// shrinks with the node, so any factor above 1 keeps it on small nodes; 2
 /// still falls back where the series says little (a range near a pole).
-fn prefer_series<E: Enclosure>(series: E, fallback: E) -> E {
+pub(crate) fn prefer_series<E: Enclosure>(series: E, fallback: E) -> E {
     if series.range().width() <= 2.0 * fallback.range().width() {
         series
     } else {
