@@ -105,7 +105,17 @@ pub(super) fn touching_pair(
     if convex && roundings(moving, target) > allowed + DEEPER {
         return stop_when_deep(moving, target, lo, hi, allowed + DEEPER, opts, report);
     }
-    if let Some(c) = convex_start
+    // A mesh or compound moving shape takes the proof after the first
+    // sample, not before: its proof searches every part near the target,
+    // a sample costs a small part of that, and a pair the motion drives
+    // deep is most often deep there already (a blade spinning into a
+    // wall). A convex one's proof costs about what a sample's EPA does.
+    let (proof_first, proof_after_sample) = if s1.is_convex() {
+        (convex_start, None)
+    } else {
+        (None, convex_start)
+    };
+    if let Some(c) = proof_first
         && proved_within(moving, target, c, allowed, opts, report)
     {
         return Ok(None);
@@ -122,6 +132,13 @@ pub(super) fn touching_pair(
         let Some((gap, _)) = gap_at(s1, m1, s2, m2, tau, reach) else {
             return Ok(None);
         };
+        if k == 1
+            && -gap <= allowed
+            && let Some(c) = proof_after_sample
+            && proved_within(moving, target, c, allowed, opts, report)
+        {
+            return Ok(None);
+        }
         if -gap > allowed {
             // Deeper than allowed: the last allowed time, by bisection.
             let (mut ok, mut bad) = (prev, tau);
