@@ -415,10 +415,17 @@ pub(crate) fn swept<E: Enclosure>(rel: &Pose<E>, small: &Bounds) -> [Interval; 3
     if small.is_empty() {
         return [Interval::new(f64::INFINITY, f64::INFINITY); 3];
     }
-    let (centre, half) = carried(rel, small);
+    // Only the box's range is wanted: its half-extents bounded from the
+    // rotation's ranges, `Σⱼ max|R_ij|·h_j` (a few plain products, where
+    // `carried`'s enclosed absolute values cost an affine operation each).
+    let (c, h) = small.centre_half();
+    let centre = rel.transform_point(&c);
     std::array::from_fn(|i| {
-        let (low, high) = ((centre[i] - half[i]).range(), (centre[i] + half[i]).range());
-        Interval::new(low.lo, high.hi)
+        let reach = (0..3)
+            .map(|j| up(rel.rotation[(i, j)].range().mag() * h[j]))
+            .fold(0.0, |sum, x| up(sum + x));
+        let range = centre[i].range();
+        Interval::new(down(range.lo - reach), up(range.hi + reach))
     })
 }
 
