@@ -59,13 +59,41 @@ impl<E: Enclosure> Pose<E> {
         Vector3::from_fn(|i, _| E::dot(column(&self.rotation, i), [v.x, v.y, v.z]))
     }
 
-    /// The pose of `other` seen from this frame: `self⁻¹·other`.
+    /// The rotation as plain numbers, when every entry is exact (a frame
+    /// that does not turn).
+    fn exact_rotation(&self) -> Option<Matrix3<f64>> {
+        let mut m = Matrix3::zeros();
+        for (out, e) in m.iter_mut().zip(self.rotation.iter()) {
+            *out = e.exact_value()?;
+        }
+        Some(m)
+    }
+
+    /// The pose of `other` seen from this frame: `self⁻¹·other`. Where one
+    /// of the two does not turn, its exact rotation enters the products as
+    /// plain numbers, half their cost.
     pub fn relative(&self, other: &Pose<E>) -> Pose<E> {
-        Pose {
-            rotation: Matrix3::from_fn(|i, j| {
-                E::dot(column(&self.rotation, i), column(&other.rotation, j))
-            }),
-            translation: self.inverse_rotate(&(other.translation - self.translation)),
+        let d = other.translation - self.translation;
+        let d = [d.x, d.y, d.z];
+        match (self.exact_rotation(), other.exact_rotation()) {
+            (Some(own), _) => Pose {
+                rotation: Matrix3::from_fn(|i, j| {
+                    E::dot_f64(column(&other.rotation, j), column(&own, i))
+                }),
+                translation: Vector3::from_fn(|i, _| E::dot_f64(d, column(&own, i))),
+            },
+            (None, Some(theirs)) => Pose {
+                rotation: Matrix3::from_fn(|i, j| {
+                    E::dot_f64(column(&self.rotation, i), column(&theirs, j))
+                }),
+                translation: Vector3::from_fn(|i, _| E::dot(column(&self.rotation, i), d)),
+            },
+            (None, None) => Pose {
+                rotation: Matrix3::from_fn(|i, j| {
+                    E::dot(column(&self.rotation, i), column(&other.rotation, j))
+                }),
+                translation: Vector3::from_fn(|i, _| E::dot(column(&self.rotation, i), d)),
+            },
         }
     }
 }
@@ -192,18 +220,20 @@ impl Spin {
     fn rotation<E: Enclosure>(&self, start: &Matrix3<f64>, s: E, c: E, mag: f64) -> Matrix3<E> {
         let slack = up(self.rot_err * mag);
         Matrix3::from_fn(|i, j| {
-            s.scaled_sum(self.rot_k[(i, j)], c, self.rot_k2[(i, j)], start[(i, j)])
-                .widen(slack)
+            s.scaled_sum(
+                self.rot_k[(i, j)],
+                c,
+                self.rot_k2[(i, j)],
+                start[(i, j)],
+                slack,
+            )
         })
     }
 
     /// The turned arm over the node.
     fn arm<E: Enclosure>(&self, arm: &Vector3<f64>, s: E, c: E, mag: f64) -> Vector3<E> {
         let slack = up(self.arm_err * mag);
-        Vector3::from_fn(|i, _| {
-            s.scaled_sum(self.arm_k[i], c, self.arm_k2[i], arm[i])
-                .widen(slack)
-        })
+        Vector3::from_fn(|i, _| s.scaled_sum(self.arm_k[i], c, self.arm_k2[i], arm[i], slack))
     }
 }
 
@@ -484,15 +514,23 @@ impl Motion {
 
     /// The centre of mass over the node.
     fn center_at<E: Enclosure>(&self, tau: E) -> Vector3<E> {
-        let mut c = self.center.coords.map(E::constant);
-        if self.displacement != Vector3::zeros() {
-            c += self.displacement.map(|d| tau * d);
+        let c = &self.center.coords;
+        // `c + d·τ + b·τ²` per coordinate, one fused rounding bound each.
+        match (
+            self.displacement == Vector3::zeros(),
+            self.bend == Vector3::zeros(),
+        ) {
+            (true, true) => c.map(E::constant),
+            (_, true) => Vector3::from_fn(|i, _| {
+                tau.scaled_sum(self.displacement[i], E::zero(), 0.0, c[i], 0.0)
+            }),
+            _ => {
+                let tau2 = tau.sqr();
+                Vector3::from_fn(|i, _| {
+                    tau.scaled_sum(self.displacement[i], tau2, self.bend[i], c[i], 0.0)
+                })
+            }
         }
-        if self.bend != Vector3::zeros() {
-            let tau2 = tau.sqr();
-            c += self.bend.map(|b| tau2 * b);
-        }
-        c
     }
 }
 

@@ -81,6 +81,61 @@ fn enclosed_poses_contain_the_exact_motion() {
     }
 }
 
+/// Every entry of `a`'s view of `b` over `span` (`Pose::relative`)
+/// contains the exact `a⁻¹·b` at sampled times of the span.
+fn encloses_relative<E: Enclosure>(a: &Motion, b: &Motion, span: TimeSpan) -> Result<(), String> {
+    let rel = a.pose::<E>(span).relative(&b.pose(span));
+    for k in 0..=16 {
+        let t = span.lo + span.width() * k as f64 / 16.0;
+        let exact = a.pose_at(t).inv_mul(&b.pose_at(t));
+        let r = exact.rotation.to_rotation_matrix();
+        for i in 0..3 {
+            let range = rel.translation[i].range();
+            let x = exact.translation.vector[i];
+            let tol = 1e-12 * (1.0 + x.abs());
+            if !(range.lo - tol <= x && x <= range.hi + tol) {
+                return Err(format!(
+                    "{:?} t={t}: translation[{i}] {x} not in {range:?}",
+                    E::KIND
+                ));
+            }
+            for j in 0..3 {
+                let range = rel.rotation[(i, j)].range();
+                let x = r[(i, j)];
+                if !(range.lo - 1e-12 <= x && x <= range.hi + 1e-12) {
+                    return Err(format!(
+                        "{:?} t={t}: R[{i}{j}] {x} not in {range:?}",
+                        E::KIND
+                    ));
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+#[test]
+fn relative_poses_contain_the_exact_relative_pose() {
+    // Either side turning or not: a side that does not turn has an exact
+    // rotation, which `relative` multiplies as plain numbers.
+    let mut rng = Rng::new(11);
+    for case in 0..400 {
+        let spins = [(0.0, 0.0), (0.0, 300.0), (300.0, 0.0), (10.0, 1000.0)][case % 4];
+        let a = random_motion(&mut rng, spins.0);
+        let b = random_motion(&mut rng, spins.1);
+        let lo = rng.range(0.0, 1.0);
+        let width = [1.0, 0.1, 1e-3, 1e-6][rng.below(4)];
+        let span = TimeSpan::new(lo * (1.0 - width), lo * (1.0 - width) + width);
+        for result in [
+            encloses_relative::<Interval>(&a, &b, span),
+            encloses_relative::<Affine>(&a, &b, span),
+            encloses_relative::<Taylor2>(&a, &b, span),
+        ] {
+            result.unwrap_or_else(|e| panic!("case {case} spins {spins:?}: {e}"));
+        }
+    }
+}
+
 #[test]
 fn narrow_nodes_give_narrow_poses() {
     // Soundness alone would allow [−∞, ∞]: check the enclosures are useful.

@@ -154,6 +154,10 @@ impl Enclosure for Affine {
         Affine::checked(c, 0.0, 0.0)
     }
 
+    fn exact_value(&self) -> Option<f64> {
+        (self.s == 0.0 && self.r == 0.0).then_some(self.c)
+    }
+
     fn from_interval(iv: Interval) -> Affine {
         let c = iv.mid();
         let r = up(iv.hi - c).max(up(c - iv.lo));
@@ -275,13 +279,13 @@ impl Enclosure for Affine {
     /// operation: the centre is a sum of three terms (two of them
     /// products) and the slope of two, each off by at most `γ₃ ≤ 2⁻⁵¹`
     /// times its terms' absolute sum.
-    fn scaled_sum(self, a: f64, other: Affine, b: f64, k: f64) -> Affine {
+    fn scaled_sum(self, a: f64, other: Affine, b: f64, k: f64, slack: f64) -> Affine {
         let (ca, cb) = (self.c * a, other.c * b);
         let (sa, sb) = (self.s * a, other.s * b);
         let c = ca + cb + k;
         let s = sa + sb;
         let rounding = (ca.abs() + cb.abs() + k.abs() + sa.abs() + sb.abs()) * (2.0 * f64::EPSILON);
-        let r = bound(self.r * a.abs() + other.r * b.abs() + rounding);
+        let r = bound(self.r * a.abs() + other.r * b.abs() + rounding + slack);
         Affine::checked(c, s, r)
     }
 

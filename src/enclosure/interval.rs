@@ -212,6 +212,10 @@ impl Enclosure for Interval {
     const KIND: Arithmetic = Arithmetic::Interval;
     const DEGREE: usize = 0;
 
+    fn exact_value(&self) -> Option<f64> {
+        (self.lo == self.hi).then_some(self.lo)
+    }
+
     fn constant(c: f64) -> Interval {
         if c.is_finite() {
             Interval::point(c)

@@ -174,6 +174,13 @@ pub trait Enclosure:
     /// Some value in `iv`, independent of time.
     fn from_interval(iv: Interval) -> Self;
 
+    /// The value, when this enclosure is one exact number at every time
+    /// (a frame that does not turn has an exact rotation): products with
+    /// it can then take the cheaper `f64` forms. `None` when unsure.
+    fn exact_value(&self) -> Option<f64> {
+        None
+    }
+
     /// The time fraction `τ` itself over the node `span`.
     fn time(span: TimeSpan) -> Self;
 
@@ -223,10 +230,11 @@ pub trait Enclosure:
     /// `cos x`, valid for any argument range.
     fn cos(self) -> Self;
 
-    /// `self·a + other·b + k` for numbers `a`, `b`, `k`: the rotation
-    /// series' entry (an arithmetic may fuse it into one rounding bound).
-    fn scaled_sum(self, a: f64, other: Self, b: f64, k: f64) -> Self {
-        self * a + other * b + k
+    /// `self·a + other·b + k` for numbers `a`, `b`, `k`, widened by
+    /// `slack`: the rotation series' entry with its prepared error (an
+    /// arithmetic may fuse it into one rounding bound).
+    fn scaled_sum(self, a: f64, other: Self, b: f64, k: f64, slack: f64) -> Self {
+        (self * a + other * b + k).widen(slack)
     }
 
     /// `Σ xᵢ·yᵢ`: the dot product of two enclosed vectors (`N ≤ 16`), the
