@@ -23,7 +23,7 @@
 //! Buffers live in a [`Solver`] that callers keep between queries; the node
 //! loop itself allocates nothing once they have grown.
 
-use crate::enclosure::{Enclosure, Interval, TimeSpan};
+use crate::enclosure::{Enclosure, TimeSpan};
 use crate::error::CcdError;
 
 /// The most axes one pair may have (a bit mask of `u64` tracks them).
@@ -249,6 +249,9 @@ impl Solver {
     ) -> Result<SolveOutcome, CcdError> {
         options.validate()?;
         let mut stats = SolveStats::default();
+        // The axes' enclosures, reused by every node: only the alive axes'
+        // slots are written and read.
+        let mut out = [E::zero(); MAX_AXES];
         let span = options.span;
         self.stack.clear();
         self.arena.clear();
@@ -271,7 +274,7 @@ impl Solver {
         // The whole span first: most searches end here, every pair apart
         // over it (so at its start too), with no evaluation at the start.
         self.ignored.clear();
-        let Some(root_node) = self.visit(gaps, root, &mut stats) else {
+        let Some(root_node) = self.visit(gaps, root, &mut out, &mut stats) else {
             return Ok(SolveOutcome {
                 status: RootStatus::Separated,
                 time: span.hi,
@@ -282,7 +285,7 @@ impl Solver {
         // Pairs touching at the very start: the answer, or left out.
         let at_start = TimeSpan::new(span.lo, span.lo);
         let ignore = options.initial_contact == InitialContact::Ignore;
-        self.touching_at_start(gaps, at_start, (start, end), ignore, &mut stats);
+        self.touching_at_start(gaps, at_start, (start, end), ignore, &mut out, &mut stats);
         if !ignore && let Some(&pair) = self.ignored.first() {
             return Ok(SolveOutcome {
                 status: RootStatus::InitiallyTouching,
@@ -314,7 +317,7 @@ impl Solver {
                             stats,
                         });
                     }
-                    let Some(node) = self.visit(gaps, frame, &mut stats) else {
+                    let Some(node) = self.visit(gaps, frame, &mut out, &mut stats) else {
                         continue; // every pair apart on this node
                     };
                     (frame, node)
@@ -327,7 +330,7 @@ impl Solver {
             // floor width (a near-touch that never quite closes).
             if frame.span.width() <= options.epsilon {
                 let floor = frame.span.width() <= options.epsilon * FLOOR_SHARE;
-                if floor || self.touching_at(gaps, clipped.hi, &node, &mut stats) {
+                if floor || self.touching_at(gaps, clipped.hi, &node, &mut out, &mut stats) {
                     return Ok(hit(clipped.lo, node.earliest_pair, stats));
                 }
             }
@@ -335,7 +338,7 @@ impl Solver {
             // A likely touch confirmed at its single time (where adaptive
             // axes are chosen for that very time) is as good as certain.
             let confirmed = match (node.certain, node.likely) {
-                (None, Some(t)) if self.touching_at(gaps, t, &node, &mut stats) => Some(t),
+                (None, Some(t)) if self.touching_at(gaps, t, &node, &mut out, &mut stats) => Some(t),
                 (certain, _) => certain,
             };
             if let Some(sure) = confirmed {
@@ -455,18 +458,16 @@ impl Solver {
         gaps: &mut G,
         t: f64,
         node: &Visited,
+        out: &mut [E; MAX_AXES],
         stats: &mut SolveStats,
     ) -> bool {
         let span = TimeSpan::new(t, t);
-        let mut out = [E::zero(); MAX_AXES];
         gaps.begin_node(span);
         for alive in &self.arena[node.start..node.end] {
-            gaps.eval(alive.pair as usize, span, alive.axes, &mut out);
+            gaps.eval(alive.pair as usize, span, alive.axes, out);
             stats.pair_evaluations += 1;
             stats.axis_evaluations += u64::from(alive.axes.count_ones());
-            let touching = (0..MAX_AXES)
-                .filter(|k| alive.axes >> k & 1 == 1)
-                .all(|k| out[k].range().hi <= 0.0);
+            let touching = set_bits(alive.axes).all(|k| out[k].range().hi <= 0.0);
             if touching {
                 return true;
             }
@@ -483,9 +484,9 @@ impl Solver {
         span: TimeSpan,
         (start, end): (usize, usize),
         all: bool,
+        out: &mut [E; MAX_AXES],
         stats: &mut SolveStats,
     ) {
-        let mut out = [E::zero(); MAX_AXES];
         gaps.begin_node(span);
         stats.nodes += 1;
         self.ignored.clear();
@@ -493,10 +494,10 @@ impl Solver {
         self.pending.extend_from_slice(&self.arena[start..end]);
         while let Some(item) = self.pending.pop() {
             let pair = item.pair as usize;
-            gaps.eval(pair, span, item.axes, &mut out);
+            gaps.eval(pair, span, item.axes, out);
             stats.pair_evaluations += 1;
             stats.axis_evaluations += u64::from(item.axes.count_ones());
-            if (0..MAX_AXES).any(|k| item.axes >> k & 1 == 1 && out[k].range().lo > 0.0) {
+            if set_bits(item.axes).any(|k| out[k].range().lo > 0.0) {
                 continue;
             }
             if self.expand_into_pending(gaps, pair, span) {
@@ -518,12 +519,12 @@ impl Solver {
         &mut self,
         gaps: &mut G,
         frame: Frame,
+        out: &mut [E; MAX_AXES],
         stats: &mut SolveStats,
     ) -> Option<Visited> {
         let span = frame.span;
         gaps.begin_node(span);
         stats.nodes += 1;
-        let mut out = [E::zero(); MAX_AXES];
         // Feasible part of the node in the local symbol e ∈ [−1, 1].
         let (mut e_lo, mut e_hi) = (f64::INFINITY, f64::NEG_INFINITY);
         let mut e_certain = f64::INFINITY;
@@ -548,10 +549,10 @@ impl Solver {
                 continue;
             }
             let pair = item.pair as usize;
-            gaps.eval(pair, span, item.axes, &mut out);
+            gaps.eval(pair, span, item.axes, out);
             stats.pair_evaluations += 1;
             stats.axis_evaluations += u64::from(item.axes.count_ones());
-            let Some(judged) = judge_pair(&out, item.axes) else {
+            let Some(judged) = judge_pair(out, item.axes) else {
                 continue;
             };
             // Dominated axes are dropped only from exact axis sets: an
@@ -670,16 +671,14 @@ fn judge_pair<E: Enclosure>(out: &[E], axes: u64) -> Option<Judgement> {
     let mut best_lo = f64::NEG_INFINITY;
     let (mut e_lo, mut e_hi) = (-1.0f64, 1.0f64);
     let (mut sure_lo, mut sure_hi) = (-1.0f64, 1.0f64);
-    let mut ranges = [Interval::point(0.0); MAX_AXES];
-    for (k, slot) in ranges.iter_mut().enumerate() {
-        if axes >> k & 1 == 0 {
-            continue;
-        }
+    // Each alive axis's upper bound (only those slots are read).
+    let mut highs = [0.0f64; MAX_AXES];
+    for k in set_bits(axes) {
         let range = out[k].range();
         if range.lo > 0.0 {
             return None;
         }
-        *slot = range;
+        highs[k] = range.hi;
         best_lo = best_lo.max(range.lo);
         // a + b·e ≤ 0 where the axis may be non-positive.
         let (a, b) = out[k].linear_lower();
@@ -704,8 +703,8 @@ fn judge_pair<E: Enclosure>(out: &[E], axes: u64) -> Option<Judgement> {
     // An axis whose upper bound is below another's lower bound never
     // separates where that other one does not: drop it.
     let mut kept = axes;
-    for (k, range) in ranges.iter().enumerate() {
-        if axes >> k & 1 == 1 && range.hi < best_lo {
+    for k in set_bits(axes) {
+        if highs[k] < best_lo {
             kept &= !(1u64 << k);
         }
     }
@@ -714,6 +713,18 @@ fn judge_pair<E: Enclosure>(out: &[E], axes: u64) -> Option<Judgement> {
         lo: e_lo,
         hi: e_hi,
         certain: (sure_lo <= sure_hi).then_some(sure_lo),
+    })
+}
+
+/// The indices of the set bits of `mask`, lowest first.
+fn set_bits(mask: u64) -> impl Iterator<Item = usize> {
+    let mut rest = mask;
+    std::iter::from_fn(move || {
+        (rest != 0).then(|| {
+            let k = rest.trailing_zeros() as usize;
+            rest &= rest - 1;
+            k
+        })
     })
 }
 
