@@ -338,7 +338,9 @@ impl Solver {
             // A likely touch confirmed at its single time (where adaptive
             // axes are chosen for that very time) is as good as certain.
             let confirmed = match (node.certain, node.likely) {
-                (None, Some(t)) if self.touching_at(gaps, t, &node, &mut out, &mut stats) => Some(t),
+                (None, Some(t)) if self.touching_at(gaps, t, &node, &mut out, &mut stats) => {
+                    Some(t)
+                }
                 (certain, _) => certain,
             };
             if let Some(sure) = confirmed {

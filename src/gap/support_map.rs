@@ -14,7 +14,9 @@
 //! contact query otherwise): the closest-points normal when
 //! the shapes are apart there (the best single separating direction), the
 //! penetration normal when they overlap (no direction separates then, but
-//! the approach direction still clips the node well). As nodes shrink the
+//! the approach direction still clips the node well; on a node wider than
+//! 1 % of the step, the shapes' own box or cylinder axis along which they
+//! overlap least stands in for it, see `SupportMap::shallowest_axis`). As nodes shrink the
 //! direction becomes right for the whole node, and the axis positive
 //! wherever the shapes are truly apart. The same direction is used three
 //! ways, because the best separating direction turns with the bodies:
@@ -25,8 +27,8 @@
 //! 2. fixed in `b`'s frame: `n(τ) = R_b(τ)·k`, `k = R_b(mid)ᵀn`.
 //!
 //! Cost: one closest-points computation per node (parry's GJK, and EPA
-//! when overlapping on a node, not at a single time, unless the closed
-//! form applies) plus some 60
+//! when overlapping on a node narrower than 1 % of the step, unless the
+//! closed form applies) plus some 60
 //! enclosure products and the support functions; a node that axis 0
 //! proves apart skips the other two. Where the direction is parry's, the
 //! last node's direction is tried first, and a node it proves apart needs
@@ -51,6 +53,11 @@ use std::sync::Arc;
 /// enough at such distances. (`f32::MAX` overflows in some of parry's
 /// paths, which then answer nothing.)
 const PREDICTION: f32 = 1.0e6;
+
+/// Nodes wider than this (a fraction of the step) whose middle overlaps
+/// take the shapes' shallowest own axis for a direction, not parry's
+/// penetration normal (see `SupportMap::shallowest_axis`).
+const COARSE_NODE: f64 = 0.01;
 
 /// Two convex shapes, each a core plus a border.
 #[derive(Clone)]
@@ -125,15 +132,19 @@ impl SupportMap {
     /// shapes show as touching (the penetration normal is the one along
     /// which they overlap *least*), and that normal's EPA was most of the
     /// cost of a cylinder query.
-    fn direction(&self, ia: &Isometry3<f64>, ib: &Isometry3<f64>, depth: bool) -> Vector3<f64> {
+    fn direction(
+        &self,
+        ia: &Isometry3<f64>,
+        ib: &Isometry3<f64>,
+        depth: bool,
+        coarse: bool,
+    ) -> Vector3<f64> {
         let rel = ia.inv_mul(ib);
         if let Some(n) = core_direction(&self.a.core, &self.b.core, &rel) {
             return n;
         }
         let pos12 = pose_from_iso(&rel);
-        if !depth
-            && let (Some(g1), Some(g2)) =
-                (self.shape_a.as_support_map(), self.shape_b.as_support_map())
+        if let (Some(g1), Some(g2)) = (self.shape_a.as_support_map(), self.shape_b.as_support_map())
         {
             let closest = || {
                 let start = pos12.translation.try_normalize().unwrap_or(Vector::X);
@@ -148,9 +159,14 @@ impl SupportMap {
                         return n;
                     }
                 }
-                Ok(GJKResult::Intersection) => {
+                Ok(GJKResult::Intersection) if !depth => {
                     if let Some(last) = self.last.get() {
                         return last;
+                    }
+                }
+                Ok(GJKResult::Intersection) if coarse => {
+                    if let Some(n) = self.shallowest_axis(&rel) {
+                        return n;
                     }
                 }
                 _ => {}
@@ -178,6 +194,42 @@ impl SupportMap {
             .vector
             .try_normalize(1.0e-300)
             .unwrap_or_else(Vector3::x)
+    }
+
+    /// For overlapping shapes (at the poses `rel`, `b`'s in `a`'s frame):
+    /// of the shapes' own face and axis directions, the one along which
+    /// they overlap least, in `a`'s frame, pointing from `a` towards `b`.
+    /// parry's penetration normal is that direction over *all* directions
+    /// (its EPA, most of a cylinder query's cost); where a box face or a
+    /// cylinder's axis meets the other shape, as it mostly does, the two
+    /// agree. `None` when neither shape has such a direction.
+    fn shallowest_axis(&self, rel: &Isometry3<f64>) -> Option<Vector3<f64>> {
+        const AXES: [[f64; 3]; 3] = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+        let own = |core: &Core| -> &'static [[f64; 3]] {
+            match core {
+                Core::Cuboid(_) => &AXES,
+                Core::Cylinder { .. } | Core::Cone { .. } => &AXES[1..2],
+                _ => &[],
+            }
+        };
+        let offset = rel.translation.vector;
+        let mut best: Option<(f64, Vector3<f64>)> = None;
+        let candidates = own(&self.a.core).iter().map(|u| Vector3::from(*u)).chain(
+            own(&self.b.core)
+                .iter()
+                .map(|u| rel.rotation * Vector3::from(*u)),
+        );
+        for u in candidates {
+            let n = if u.dot(&offset) >= 0.0 { u } else { -u };
+            // The gap along `n` (negative: the overlap).
+            let gap = n.dot(&offset)
+                - self.a.support_f64(&n)
+                - self.b.support_f64(&-(rel.rotation.inverse() * n));
+            if best.is_none_or(|(g, _)| gap > g) {
+                best = Some((gap, n));
+            }
+        }
+        best.map(|(_, n)| n)
     }
 
     pub fn eval<E: Enclosure>(
@@ -214,7 +266,8 @@ impl SupportMap {
                 return;
             }
         }
-        let m = self.direction(&ia, &ib, span.lo < span.hi);
+        let width = span.hi - span.lo;
+        let m = self.direction(&ia, &ib, width > 0.0, width > COARSE_NODE);
         self.last.set(Some(m));
         let n = ia.rotation * m;
         if axes & 1 != 0 {
