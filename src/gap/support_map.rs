@@ -276,6 +276,21 @@ impl SupportMap {
         if axes & !0b1 == 0 || super::apart_by(out, axes, 0b1) {
             return;
         }
+        let single = span.lo == span.hi;
+        if single {
+            // At a single time the direction fixed in either frame is the
+            // world one: axes 1 and 2 would repeat axis 0.
+            let along_n = if axes & 1 != 0 {
+                out[0]
+            } else {
+                world_axis(&n)
+            };
+            for (k, slot) in out.iter_mut().enumerate().take(Self::AXES).skip(1) {
+                if axes >> k & 1 != 0 {
+                    *slot = along_n;
+                }
+            }
+        }
         // A direction fixed in one side's frame, turned into the world with
         // that side: `w = R_a(τ)·m` (or `R_b(τ)·k`). The gap along `w` is
         // `d·w − h_a(R_aᵀw) − h_b(−R_bᵀw)` with `d` the origins' offset, and
@@ -295,10 +310,10 @@ impl SupportMap {
             along(&w) - self.a.support(&da, norm) - self.b.support_f64(&(-k)) - up(self.skin * norm)
         };
         let k = ib.rotation.inverse() * n;
-        if axes & 0b10 != 0 {
+        if axes & 0b10 != 0 && !single {
             out[1] = in_a(&m);
         }
-        if axes & 0b100 != 0 {
+        if axes & 0b100 != 0 && !single {
             out[2] = in_b(&k);
         }
         // The face normals, fixed in their triangle's frame and turned to
