@@ -424,7 +424,10 @@ pub(crate) fn segment_segment(
 /// which this replaces, zig-zag slowly for a segment nearly parallel to a
 /// face: 4 steps left directions that cost some capsule queries 0.03 of
 /// the step of accuracy.)
-fn segment_box(s: &[Vector3<f64>; 2], half: &Vector3<f64>) -> (Vector3<f64>, Vector3<f64>) {
+pub(crate) fn segment_box(
+    s: &[Vector3<f64>; 2],
+    half: &Vector3<f64>,
+) -> (Vector3<f64>, Vector3<f64>) {
     let (s0, d) = (s[0], s[1] - s[0]);
     let mut cuts = [0.0f64; 8];
     let mut n = 0;
