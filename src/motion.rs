@@ -591,8 +591,13 @@ impl Trajectory for Motion {
     }
 
     fn pose_at(&self, tau: f64) -> Isometry3<f64> {
-        let turn = UnitQuaternion::from_scaled_axis(self.rotation * tau);
         let center = self.center.coords + self.displacement * tau + self.bend * (tau * tau);
+        if self.spin.is_none() {
+            // No turn (or one below any length scale, see `Spin::NEGLIGIBLE`).
+            let origin = center + self.arm;
+            return Isometry3::from_parts(Translation3::from(origin), self.start_rotation);
+        }
+        let turn = UnitQuaternion::from_scaled_axis(self.rotation * tau);
         let origin = center + turn * self.arm;
         Isometry3::from_parts(Translation3::from(origin), turn * self.start_rotation)
     }
