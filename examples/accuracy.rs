@@ -151,17 +151,18 @@ fn main() {
         kinds_used.join(", ")
     )
     .unwrap();
-    writeln!(md, "| method | ε (of step) | cases | median µs | p99 µs | median evals | median error | max error | false neg. | false pos. |").unwrap();
-    writeln!(md, "|---|---|---|---|---|---|---|---|---|---|").unwrap();
+    writeln!(md, "| method | ε (of step) | cases | median µs | p99 µs | max µs | median evals | median error | max error | false neg. | false pos. |").unwrap();
+    writeln!(md, "|---|---|---|---|---|---|---|---|---|---|---|").unwrap();
     for r in &rows {
         writeln!(
             md,
-            "| {} | {} | {} | {:.2} | {:.2} | {} | {:.1e} | {:.1e} | {} | {} |",
+            "| {} | {} | {} | {:.2} | {:.2} | {:.2} | {} | {:.1e} | {:.1e} | {} | {} |",
             r.method,
             r.epsilon.map_or("—".into(), |e| format!("{e:.0e}")),
             r.cases,
             quantile(&r.times_us, 0.5),
             quantile(&r.times_us, 0.99),
+            quantile(&r.times_us, 1.0),
             if r.evaluations.is_empty() {
                 "—".into()
             } else {
