@@ -26,38 +26,44 @@ fn random_motion(rng: &mut Rng, spin: f64) -> Motion {
     .unwrap()
 }
 
-/// Every entry of the enclosed pose over `span` contains the exact pose at
-/// sampled times of the span.
-fn encloses<E: Enclosure>(motion: &Motion, span: TimeSpan) -> Result<(), String> {
-    let pose: Pose<E> = motion.pose(span);
-    for k in 0..=16 {
-        let t = span.lo + span.width() * k as f64 / 16.0;
-        let exact = motion.pose_at(t);
-        let r = exact.rotation.to_rotation_matrix();
-        for i in 0..3 {
-            let range = pose.translation[i].range();
-            let x = exact.translation.vector[i];
-            // Ground truth is itself f64: allow its rounding.
-            let tol = 1e-12 * (1.0 + x.abs());
-            if !(range.lo - tol <= x && x <= range.hi + tol) {
+/// Every entry of `pose` contains `exact`'s (at time `t`, for the message).
+fn contains<E: Enclosure>(pose: &Pose<E>, exact: &Isometry3<f64>, t: f64) -> Result<(), String> {
+    let r = exact.rotation.to_rotation_matrix();
+    for i in 0..3 {
+        let range = pose.translation[i].range();
+        let x = exact.translation.vector[i];
+        // Ground truth is itself f64: allow its rounding.
+        let tol = 1e-12 * (1.0 + x.abs());
+        if !(range.lo - tol <= x && x <= range.hi + tol) {
+            return Err(format!(
+                "{:?} t={t}: translation[{i}] {x} not in {range:?}",
+                E::KIND
+            ));
+        }
+        for j in 0..3 {
+            let range = pose.rotation[(i, j)].range();
+            let x = r[(i, j)];
+            if !(range.lo - 1e-12 <= x && x <= range.hi + 1e-12) {
                 return Err(format!(
-                    "{:?} t={t}: translation[{i}] {x} not in {range:?}",
+                    "{:?} t={t}: R[{i}{j}] {x} not in {range:?}",
                     E::KIND
                 ));
-            }
-            for j in 0..3 {
-                let range = pose.rotation[(i, j)].range();
-                let x = r[(i, j)];
-                if !(range.lo - 1e-12 <= x && x <= range.hi + 1e-12) {
-                    return Err(format!(
-                        "{:?} t={t}: R[{i}{j}] {x} not in {range:?}",
-                        E::KIND
-                    ));
-                }
             }
         }
     }
     Ok(())
+}
+
+/// 17 times evenly spread over `span`.
+fn sample_times(span: TimeSpan) -> impl Iterator<Item = f64> {
+    (0..=16).map(move |k| span.lo + span.width() * k as f64 / 16.0)
+}
+
+/// Every entry of the enclosed pose over `span` contains the exact pose at
+/// sampled times of the span.
+fn encloses<E: Enclosure>(motion: &Motion, span: TimeSpan) -> Result<(), String> {
+    let pose: Pose<E> = motion.pose(span);
+    sample_times(span).try_for_each(|t| contains(&pose, &motion.pose_at(t), t))
 }
 
 #[test]
@@ -85,33 +91,7 @@ fn enclosed_poses_contain_the_exact_motion() {
 /// contains the exact `a⁻¹·b` at sampled times of the span.
 fn encloses_relative<E: Enclosure>(a: &Motion, b: &Motion, span: TimeSpan) -> Result<(), String> {
     let rel = a.pose::<E>(span).relative(&b.pose(span));
-    for k in 0..=16 {
-        let t = span.lo + span.width() * k as f64 / 16.0;
-        let exact = a.pose_at(t).inv_mul(&b.pose_at(t));
-        let r = exact.rotation.to_rotation_matrix();
-        for i in 0..3 {
-            let range = rel.translation[i].range();
-            let x = exact.translation.vector[i];
-            let tol = 1e-12 * (1.0 + x.abs());
-            if !(range.lo - tol <= x && x <= range.hi + tol) {
-                return Err(format!(
-                    "{:?} t={t}: translation[{i}] {x} not in {range:?}",
-                    E::KIND
-                ));
-            }
-            for j in 0..3 {
-                let range = rel.rotation[(i, j)].range();
-                let x = r[(i, j)];
-                if !(range.lo - 1e-12 <= x && x <= range.hi + 1e-12) {
-                    return Err(format!(
-                        "{:?} t={t}: R[{i}{j}] {x} not in {range:?}",
-                        E::KIND
-                    ));
-                }
-            }
-        }
-    }
-    Ok(())
+    sample_times(span).try_for_each(|t| contains(&rel, &a.pose_at(t).inv_mul(&b.pose_at(t)), t))
 }
 
 #[test]

@@ -349,6 +349,16 @@ mod tests {
     use rapier3d::math::Rotation;
     use rapier3d::parry::shape::{Ball, Capsule, Cuboid, HeightField, TriMesh};
 
+    /// Seeded numbers in `[0, 1)` (a linear congruential generator).
+    fn uniform(mut seed: u64) -> impl FnMut() -> f32 {
+        move || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (seed >> 40) as f32 / (1u64 << 24) as f32
+        }
+    }
+
     /// A wavy 8 × 8 m floor as a triangle mesh, and as a heightfield.
     fn floors() -> (TriMesh, HeightField) {
         let n = 9;
@@ -385,13 +395,7 @@ mod tests {
     /// it.
     #[test]
     fn capsule_box_contacts_match_parrys() {
-        let mut seed = 9u64;
-        let mut next = move || {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (seed >> 40) as f32 / (1u64 << 24) as f32
-        };
+        let mut next = uniform(9u64);
         let mut compared = 0;
         for case in 0..2000 {
             let capsule = Capsule::new_y(0.05 + 0.5 * next(), 0.02 + 0.3 * next());
@@ -472,13 +476,7 @@ mod tests {
     fn composite_contacts_match_parrys() {
         let (mesh, field) = floors();
         let floors: [&dyn Shape; 2] = [&mesh, &field];
-        let mut seed = 5u64;
-        let mut next = move || {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (seed >> 40) as f32 / (1u64 << 24) as f32
-        };
+        let mut next = uniform(5u64);
         let (mut touching, mut differ) = (0, 0);
         for case in 0..1500 {
             let floor = floors[case % 2];
