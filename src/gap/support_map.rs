@@ -16,9 +16,10 @@
 //! penetration normal when they overlap (no direction separates then, but
 //! the approach direction still clips the node well; on a node wider than
 //! 1 % of the step, the shapes' own box or cylinder axis along which they
-//! overlap least stands in for it, see `SupportMap::shallowest_axis`). As nodes shrink the
-//! direction becomes right for the whole node, and the axis positive
-//! wherever the shapes are truly apart. The same direction is used three
+//! overlap least stands in for it, see `SupportMap::shallowest_axis`). As
+//! nodes shrink the direction becomes right for the whole node, and the
+//! axis positive wherever the shapes are truly apart. The same direction
+//! is used three
 //! ways, because the best separating direction turns with the bodies:
 //!
 //! 0. fixed in the world: `n`;
@@ -131,7 +132,8 @@ impl SupportMap {
     /// of parry's penetration normal: along every direction overlapping
     /// shapes show as touching (the penetration normal is the one along
     /// which they overlap *least*), and that normal's EPA was most of the
-    /// cost of a cylinder query.
+    /// cost of a cylinder query. On a `coarse` node (wide: only its
+    /// clipping needs the direction) they take [`Self::shallowest_axis`].
     fn direction(
         &self,
         ia: &Isometry3<f64>,
