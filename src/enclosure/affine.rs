@@ -388,6 +388,24 @@ mod tests {
     }
 
     proptest! {
+        /// `greatest` of a few exact linear forms holds their pointwise
+        /// maximum at every time of the node (kept as one of them only
+        /// when that one is above the others throughout).
+        #[test]
+        fn the_greatest_holds_the_pointwise_maximum(
+            lines in prop::collection::vec((-10.0f64..10.0, -10.0f64..10.0), 1..8),
+        ) {
+            let forms: Vec<Affine> = lines.iter().map(|&(c, s)| Affine { c, s, r: 0.0 }).collect();
+            let g = crate::enclosure::greatest(&forms);
+            for k in 0..=64 {
+                let e = -1.0 + 2.0 * k as f64 / 64.0;
+                let max = lines.iter().map(|&(c, s)| c + s * e).fold(f64::NEG_INFINITY, f64::max);
+                let (lo, hi) = (g.c + g.s * e - g.r, g.c + g.s * e + g.r);
+                let tol = 1e-12 * (1.0 + max.abs());
+                prop_assert!(lo - tol <= max && max <= hi + tol, "e {e}: max {max} not in [{lo}, {hi}] of {g:?}");
+            }
+        }
+
         /// The range holds the one rounded outward step by step (a `next_up`
         /// or `next_down` after each operation), which holds the exact ends.
         #[test]
