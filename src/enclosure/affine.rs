@@ -396,7 +396,7 @@ mod tests {
             lines in prop::collection::vec((-10.0f64..10.0, -10.0f64..10.0), 1..8),
         ) {
             let forms: Vec<Affine> = lines.iter().map(|&(c, s)| Affine { c, s, r: 0.0 }).collect();
-            let g = crate::enclosure::greatest(&forms);
+            let g = crate::enclosure::greatest(forms).expect("not empty");
             for k in 0..=64 {
                 let e = -1.0 + 2.0 * k as f64 / 64.0;
                 let max = lines.iter().map(|&(c, s)| c + s * e).fold(f64::NEG_INFINITY, f64::max);

@@ -269,29 +269,31 @@ pub trait Enclosure:
     fn restrict(self, from: TimeSpan, to: TimeSpan) -> Self;
 }
 
-/// The pointwise greatest of `p` (not empty), each range taken once
-/// (chaining [`Enclosure::max`] takes both operands' ranges on every
-/// call). One above all the others at every time of the node is kept as
-/// it is; otherwise the bounds of the greatest value at any time.
-pub(crate) fn greatest<E: Enclosure>(p: &[E]) -> E {
-    let (mut top, mut top_range) = (0, p[0].range());
+/// The pointwise greatest of `p` (`None` when it is empty), each range
+/// taken once (chaining [`Enclosure::max`] takes both operands' ranges on
+/// every call). One above all the others at every time of the node is
+/// kept as it is; otherwise the bounds of the greatest value at any time.
+pub(crate) fn greatest<E: Enclosure>(p: impl IntoIterator<Item = E>) -> Option<E> {
+    let mut p = p.into_iter();
+    let mut top = p.next()?;
+    let mut top_range = top.range();
     // The largest lower bound of all, and upper bound of all but `top`.
     let (mut best_lo, mut others_hi) = (top_range.lo, f64::NEG_INFINITY);
-    for (i, x) in p.iter().enumerate().skip(1) {
+    for x in p {
         let r = x.range();
         best_lo = best_lo.max(r.lo);
         if r.hi > top_range.hi {
             others_hi = others_hi.max(top_range.hi);
-            (top, top_range) = (i, r);
+            (top, top_range) = (x, r);
         } else {
             others_hi = others_hi.max(r.hi);
         }
     }
-    if top_range.lo >= others_hi {
-        p[top]
+    Some(if top_range.lo >= others_hi {
+        top
     } else {
         E::from_interval(Interval::new(best_lo, top_range.hi))
-    }
+    })
 }
 
 /// The least and the greatest of a few enclosures, each range taken once

@@ -188,7 +188,7 @@ impl Convex {
             Core::Point => E::zero(),
             Core::Cuboid(e) => E::dot_f64([d.x.abs(), d.y.abs(), d.z.abs()], [e.x, e.y, e.z]),
             Core::Segment([a, b]) => dot(d, a).max(dot(d, b)),
-            Core::Triangle([a, b, c]) => greatest(&[dot(d, a), dot(d, b), dot(d, c)]),
+            Core::Triangle(vs) => highest(vs.iter().map(|v| dot(d, v))),
             Core::Polyhedron(vs) => polyhedron_support(vs, d),
             Core::Cylinder {
                 half_height,
@@ -267,19 +267,18 @@ fn radial<E: Enclosure>(d: &Vector3<E>, norm: f64) -> E {
         .unwrap_or(E::constant(norm))
 }
 
+/// The greatest of some vertex products (see [`greatest`]); should there
+/// be none, the whole line.
+fn highest<E: Enclosure>(products: impl Iterator<Item = E>) -> E {
+    greatest(products).unwrap_or(E::constant(f64::INFINITY))
+}
+
 /// `max_v v·d` over the vertices. Vertices that an interval bound shows to
 /// be below another vertex's lower bound are skipped: they can never be the
 /// maximum on this node, and skipping them keeps the enclosure affine.
-/// Most vertex products [`polyhedron_support`] keeps at once.
-const SURVIVORS: usize = 16;
-
 fn polyhedron_support<E: Enclosure>(vs: &[Vector3<f64>], d: &Vector3<E>) -> E {
     if vs.len() <= 4 {
-        let mut all = [E::zero(); 4];
-        for (slot, v) in all.iter_mut().zip(vs) {
-            *slot = dot(d, v);
-        }
-        return greatest(&all[..vs.len()]);
+        return highest(vs.iter().map(|v| dot(d, v)));
     }
     // `d` over the node as a centre `c` and a radius `r` per component:
     // then `v·d` lies within `c·v ± r·|v|`, two plain dot products per
@@ -301,30 +300,16 @@ fn polyhedron_support<E: Enclosure>(vs: &[Vector3<f64>], d: &Vector3<E>) -> E {
         .iter()
         .map(|v| reach(v).0)
         .fold(f64::NEG_INFINITY, f64::max);
-    // The survivors' products, their greatest taken at once. A NaN-free
-    // bound always keeps the vertex that set `best_lo`; should every bound
-    // be unbounded, fall back to the whole line.
-    let mut kept = [E::zero(); SURVIVORS];
-    let mut count = 0;
-    let mut result: Option<E> = None;
-    for v in vs {
-        if reach(v).1 < best_lo {
-            continue;
-        }
-        if count == SURVIVORS {
-            // Rare: flush into the running greatest.
-            let so_far = greatest(&kept);
-            result = Some(result.map_or(so_far, |m| m.max(so_far)));
-            count = 0;
-        }
-        kept[count] = dot(d, v);
-        count += 1;
-    }
-    if count > 0 {
-        let rest = greatest(&kept[..count]);
-        result = Some(result.map_or(rest, |m| m.max(rest)));
-    }
-    result.unwrap_or(E::constant(f64::INFINITY))
+    // A NaN-free bound always keeps the vertex that set `best_lo` (a NaN
+    // bound keeps its vertex too).
+    highest(
+        vs.iter()
+            .filter(|v| {
+                let hi = reach(v).1;
+                hi >= best_lo || hi.is_nan()
+            })
+            .map(|v| dot(d, v)),
+    )
 }
 
 #[cfg(test)]

@@ -69,13 +69,14 @@ fn capsule_cuboid(
         (Some(c), Some(b)) => (c, b, true),
         _ => (g2.as_capsule()?, g1.as_cuboid()?, false),
     };
-    // The capsule's frame seen from the box's.
-    let iso12 = iso_from_pose(pose1).inv_mul(&iso_from_pose(pose2));
-    let capsule_in_box = if capsule_first {
-        iso12.inverse()
+    let (capsule_pose, box_pose) = if capsule_first {
+        (pose1, pose2)
     } else {
-        iso12
+        (pose2, pose1)
     };
+    // The segment in the box's frame, where the box is axis-aligned.
+    let box_iso = iso_from_pose(box_pose);
+    let capsule_in_box = box_iso.inv_mul(&iso_from_pose(capsule_pose));
     let segment = [capsule.segment.a, capsule.segment.b]
         .map(|p| (capsule_in_box * point_from_glam(p)).coords);
     let (on_segment, on_box) = gap::segment_box(&segment, &vec_from_glam(cuboid.half_extents));
@@ -91,36 +92,21 @@ fn capsule_cuboid(
     if dist > prediction {
         return Some(None);
     }
-    // From the capsule towards the box, in the box's frame, and the
-    // capsule's point and that normal in the capsule's own frame.
-    let n = between / core;
-    let box_to_capsule = capsule_in_box.inverse();
-    let capsule_point = (box_to_capsule * Point3::from(on_segment + n * radius)).coords;
-    let capsule_normal = box_to_capsule * n;
-    let (box_point, box_normal) = (glam_from_vec(&on_box), glam_from_vec(&-n));
-    let (capsule_point, capsule_normal) = (
-        glam_from_vec(&capsule_point),
-        glam_from_vec(&capsule_normal),
+    // In the world: the normal from the capsule towards the box, and the
+    // witness on each surface.
+    let n = box_iso.rotation * (between / core);
+    let on_capsule = box_iso * Point3::from(on_segment) + n * radius;
+    let on_box = box_iso * Point3::from(on_box);
+    let (on_capsule, on_box) = (
+        glam_from_vec(&on_capsule.coords),
+        glam_from_vec(&on_box.coords),
     );
-    let mut found = if capsule_first {
-        Contact::new(
-            capsule_point,
-            box_point,
-            capsule_normal,
-            box_normal,
-            dist as Real,
-        )
+    let (out_of_capsule, out_of_box) = (glam_from_vec(&n), glam_from_vec(&-n));
+    Some(Some(if capsule_first {
+        Contact::new(on_capsule, on_box, out_of_capsule, out_of_box, dist as Real)
     } else {
-        Contact::new(
-            box_point,
-            capsule_point,
-            box_normal,
-            capsule_normal,
-            dist as Real,
-        )
-    };
-    found.transform_by_mut(pose1, pose2);
-    Some(Some(found))
+        Contact::new(on_box, on_capsule, out_of_box, out_of_capsule, dist as Real)
+    }))
 }
 
 /// parry's query dispatcher, except for contacts: two boxes or triangles
