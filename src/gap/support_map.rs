@@ -37,12 +37,13 @@
 
 use super::Side;
 use super::support::{Convex, Core, ORTHO_SLACK, dot, norm_up, tr_mul};
-use crate::convert::{pose_from_iso, vec_from_glam};
+use crate::convert::{glam_from_vec, pose_from_iso, vec_from_glam};
 use crate::enclosure::rounding::up;
 use crate::enclosure::{Enclosure, TimeSpan};
 use crate::motion::Trajectory;
 use nalgebra::{Isometry3, Vector3};
 use rapier3d::parry::math::{Pose as ParryPose, Vector};
+use rapier3d::parry::query::epa::EPA;
 use rapier3d::parry::query::gjk::{self, CsoPoint, GJKResult, VoronoiSimplex};
 use rapier3d::parry::shape::Shape;
 use std::cell::Cell;
@@ -59,6 +60,16 @@ const PREDICTION: f32 = 1.0e6;
 /// take the shapes' shallowest own axis for a direction, not parry's
 /// penetration normal (see `SupportMap::shallowest_axis`).
 const COARSE_NODE: f64 = 0.01;
+
+/// What parry's GJK (and EPA) said of the shapes at one pose.
+enum Found {
+    /// A direction from `a` towards `b` (`a`'s frame): the closest points'
+    /// normal, or the penetration normal.
+    Apart(Vector),
+    /// The shapes overlap; no penetration normal was asked for.
+    Overlap,
+    Nothing,
+}
 
 /// Two convex shapes, each a core plus a border.
 #[derive(Clone)]
@@ -148,25 +159,42 @@ impl SupportMap {
         let pos12 = pose_from_iso(&rel);
         if let (Some(g1), Some(g2)) = (self.shape_a.as_support_map(), self.shape_b.as_support_map())
         {
-            let closest = || {
-                let start = pos12.translation.try_normalize().unwrap_or(Vector::X);
+            // GJK starts from the last node's direction (a nearby time's
+            // answer, so it converges in fewer steps), else the origins'.
+            // On overlap with a `depth` wanted, parry's EPA takes GJK's last
+            // simplex, as its own contact query would after running GJK anew.
+            let start = match self.last.get() {
+                Some(last) => glam_from_vec(&last),
+                None => pos12.translation.try_normalize().unwrap_or(Vector::X),
+            };
+            let search = || {
                 let mut simplex = VoronoiSimplex::new();
                 simplex.reset(CsoPoint::from_shapes(&pos12, g1, g2, start));
-                gjk::closest_points(&pos12, g1, g2, PREDICTION, true, &mut simplex)
+                match gjk::closest_points(&pos12, g1, g2, PREDICTION, true, &mut simplex) {
+                    GJKResult::ClosestPoints(_, _, n) => Found::Apart(n),
+                    GJKResult::Intersection if depth && !coarse => {
+                        match EPA::new().closest_points(&pos12, g1, g2, &simplex) {
+                            Some((_, _, n)) => Found::Apart(n),
+                            None => Found::Nothing,
+                        }
+                    }
+                    GJKResult::Intersection => Found::Overlap,
+                    _ => Found::Nothing,
+                }
             };
             // As below: a panic in parry only costs the hint.
-            match std::panic::catch_unwind(std::panic::AssertUnwindSafe(closest)) {
-                Ok(GJKResult::ClosestPoints(_, _, n)) => {
+            match std::panic::catch_unwind(std::panic::AssertUnwindSafe(search)) {
+                Ok(Found::Apart(n)) => {
                     if let Some(n) = vec_from_glam(n).try_normalize(1.0e-6) {
                         return n;
                     }
                 }
-                Ok(GJKResult::Intersection) if !depth => {
+                Ok(Found::Overlap) if !depth => {
                     if let Some(last) = self.last.get() {
                         return last;
                     }
                 }
-                Ok(GJKResult::Intersection) if coarse => {
+                Ok(Found::Overlap) => {
                     if let Some(n) = self.shallowest_axis(&rel) {
                         return n;
                     }
@@ -174,6 +202,9 @@ impl SupportMap {
                 _ => {}
             }
         }
+        // Shapes that are no support maps, or parry found nothing: its
+        // contact query. It is not written to be total on degenerate
+        // shapes; a panic there only costs us the hint, not the answer.
         let query = || {
             rapier3d::parry::query::contact(
                 &ParryPose::IDENTITY,
@@ -183,14 +214,11 @@ impl SupportMap {
                 PREDICTION,
             )
         };
-        // parry's queries are not written to be total on degenerate shapes;
-        // a panic there only costs us the hint, not the answer.
         let contact = std::panic::catch_unwind(std::panic::AssertUnwindSafe(query));
-        if let Ok(Ok(Some(c))) = contact {
-            let n = vec_from_glam(c.normal1);
-            if let Some(n) = n.try_normalize(1.0e-6) {
-                return n;
-            }
+        if let Ok(Ok(Some(c))) = contact
+            && let Some(n) = vec_from_glam(c.normal1).try_normalize(1.0e-6)
+        {
+            return n;
         }
         rel.translation
             .vector
