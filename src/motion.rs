@@ -454,6 +454,33 @@ impl Motion {
         padded(self.displacement.norm() + self.bend.norm() + self.turning_chord(radius))
     }
 
+    /// How far a point at `local` in this frame (and everything within
+    /// `radius` of it) stays from the rotation centre, at every time, metres:
+    /// turning does not change it.
+    pub fn reach(&self, local: &Vector3<f64>, radius: f64) -> f64 {
+        let arm = (self.arm + self.start_matrix * local).norm();
+        padded(arm + radius) * (1.0 + 1.0e-12)
+    }
+
+    /// A lower bound of the distance between this frame's rotation centre
+    /// and `other`'s over the times `span`, metres. The centres' offset is
+    /// `d(τ) = d₀ + v·τ + w·τ²`, and `|d(τ) − d(m)| = |τ − m|·|v + w·(τ + m)|`
+    /// is at most `h·(|v| + |w|·(2m + h))` about the middle `m` (`h` the
+    /// half-width); no rotation enters, so this costs a few dozen flops.
+    pub fn centres_gap(&self, other: &Motion, span: TimeSpan) -> f64 {
+        let d0 = self.center.coords - other.center.coords;
+        let v = self.displacement - other.displacement;
+        let w = self.bend - other.bend;
+        let (m, h) = span.center_radius();
+        let at_middle = (d0 + v * m + w * (m * m)).norm();
+        let (v, w) = (v.norm(), w.norm());
+        let drift = h * (v + w * (2.0 * m.abs() + h));
+        // Every term is rounded a few times: 1e-12 of the sizes involved
+        // covers that many times over.
+        let sizes = self.center.coords.norm() + other.center.coords.norm() + v + w;
+        at_middle - padded(drift) - (1.0e-12 * sizes + f64::MIN_POSITIVE)
+    }
+
     /// An upper bound on how much the distance between a point within
     /// `radius` of this frame's origin and a point within `other_radius`
     /// of `other`'s changes during the step: their centres' relative

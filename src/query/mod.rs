@@ -26,6 +26,7 @@
 //! assert!((toi.time - 0.008).abs() < 1e-4 / 60.0);
 //! ```
 
+mod balls;
 mod contact;
 mod frames;
 mod pairs;
@@ -41,6 +42,7 @@ use crate::gap;
 use crate::gap::composite::{self, PairSide};
 use crate::motion::Motion;
 use crate::solve::{InitialContact, RootStatus, SolveOptions, SolveStats, Solver};
+use balls::Balls;
 use frames::FrameDef;
 use nalgebra::{Point3, Vector3};
 use pairs::{CompositePair, PairContent, PairEntry, Search};
@@ -234,10 +236,17 @@ impl Query {
                     let built = gap::build(m.shape, t.shape, options.skin)?;
                     PairContent::Leaf(built.gap, built.swapped)
                 };
+                let balls = Balls::new(
+                    &kind,
+                    (&m.motion, m.shape),
+                    (&t.motion, t.shape),
+                    options.skin,
+                );
                 pairs.push(PairEntry {
                     kind,
                     a,
                     b,
+                    balls,
                     moving: i,
                     target: j,
                 });

@@ -1,5 +1,6 @@
 //! The pairs of one query as the solver sees them.
 
+use super::balls::Balls;
 use super::frames::{FrameDef, Frames};
 use crate::enclosure::{Enclosure, InArithmetic, TimeSpan};
 use crate::error::CcdError;
@@ -119,6 +120,9 @@ pub(super) struct PairEntry<'s> {
     pub kind: PairContent<'s>,
     pub a: u32,
     pub b: u32,
+    /// The balls test tried before a leaf pair's family (`None` for
+    /// pairs that turn too little for it to pay, and for composites).
+    pub balls: Option<Balls>,
     pub moving: usize,
     pub target: usize,
 }
@@ -168,10 +172,13 @@ impl<'s, E: Enclosure> PairSet<'s, E> {
             }
             _ => PairContent::Composite(CompositePair::new(a, b)),
         };
+        // A composite's child pair takes no balls test: its parent's
+        // bounding axes already pruned it on this node.
         self.pairs.push(PairEntry {
             kind,
             a: a.frame,
             b: b.frame,
+            balls: None,
             moving,
             target,
         });
@@ -230,6 +237,17 @@ impl<E: Enclosure> GapSet<E> for PairSet<'_, E> {
         let (fa, fb) = (entry.a, entry.b);
         match &entry.kind {
             PairContent::Leaf(_, swapped) => {
+                // Most nodes of a fast spin, far from the contact, end here,
+                // with no pose enclosed.
+                let first = axes.trailing_zeros() as usize;
+                if let Some(balls) = &entry.balls
+                    && let Some(gap) =
+                        balls.gap(self.frames.motion(fa), self.frames.motion(fb), span)
+                    && first < out.len()
+                {
+                    out[first] = E::constant(gap);
+                    return;
+                }
                 let (fa, fb) = if *swapped { (fb, fa) } else { (fa, fb) };
                 let (pa, pb) = (self.frames.pose(fa, span), self.frames.pose(fb, span));
                 let a = Side {
