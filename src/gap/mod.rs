@@ -118,6 +118,11 @@ impl PairGap {
     pub fn reads_rotation(&self) -> [bool; 2] {
         match self {
             PairGap::BallBall(_) => [false, false],
+            // A ball is its frame's origin grown: only the other side turns
+            // it into view.
+            PairGap::BallCuboid(_) | PairGap::BallTriangle(_) | PairGap::BallSegment(_) => {
+                [false, true]
+            }
             _ => [true, true],
         }
     }
