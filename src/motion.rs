@@ -463,22 +463,52 @@ impl Motion {
     }
 
     /// A lower bound of the distance between this frame's rotation centre
-    /// and `other`'s over the times `span`, metres. The centres' offset is
-    /// `d(τ) = d₀ + v·τ + w·τ²`, and `|d(τ) − d(m)| = |τ − m|·|v + w·(τ + m)|`
-    /// is at most `h·(|v| + |w|·(2m + h))` about the middle `m` (`h` the
-    /// half-width); no rotation enters, so this costs a few dozen flops.
+    /// and `other`'s over the times `span`, metres; a few dozen flops, no
+    /// rotation (see [`Motion::centres_offset`]).
     pub fn centres_gap(&self, other: &Motion, span: TimeSpan) -> f64 {
+        let (at_middle, stray) = self.centres_offset(other, span, &Vector3::zeros());
+        at_middle.norm() - stray
+    }
+
+    /// Where `other`'s rotation centre is in this frame's coordinates (from
+    /// its origin) at the middle of `span`, and a bound on how far it strays
+    /// from there over the span, metres; `None` when this frame turns (its
+    /// coordinates then turn too).
+    pub fn centre_seen_from(&self, other: &Motion, span: TimeSpan) -> Option<(Vector3<f64>, f64)> {
+        if self.spin.is_some() {
+            return None;
+        }
+        // A frame that does not turn has its origin at `c(τ) + arm`.
+        let (at_middle, stray) = other.centres_offset(self, span, &self.arm);
+        Some((self.start_matrix.tr_mul(&at_middle), stray))
+    }
+
+    /// `d(m) − shift` for the centres' offset `d(τ) = c(τ) − c_other(τ)` at
+    /// the middle `m` of `span`, and a bound on `|d(τ) − d(m)|` over the span
+    /// plus the rounding of both. With `d(τ) = d₀ + v·τ + w·τ²`,
+    /// `|d(τ) − d(m)| = |τ − m|·|v + w·(τ + m)| ≤ h·(|v| + |w|·(2m + h))`
+    /// (`h` the half-width).
+    fn centres_offset(
+        &self,
+        other: &Motion,
+        span: TimeSpan,
+        shift: &Vector3<f64>,
+    ) -> (Vector3<f64>, f64) {
         let d0 = self.center.coords - other.center.coords;
         let v = self.displacement - other.displacement;
         let w = self.bend - other.bend;
         let (m, h) = span.center_radius();
-        let at_middle = (d0 + v * m + w * (m * m)).norm();
+        let at_middle = d0 + v * m + w * (m * m) - shift;
         let (v, w) = (v.norm(), w.norm());
         let drift = h * (v + w * (2.0 * m.abs() + h));
-        // Every term is rounded a few times: 1e-12 of the sizes involved
-        // covers that many times over.
-        let sizes = self.center.coords.norm() + other.center.coords.norm() + v + w;
-        at_middle - padded(drift) - (1.0e-12 * sizes + f64::MIN_POSITIVE)
+        // Every term is rounded a few times (a rotation by an orthonormal
+        // matrix too): 1e-12 of the sizes involved covers that many times
+        // over.
+        let sizes = self.center.coords.norm() + other.center.coords.norm() + shift.norm() + v + w;
+        (
+            at_middle,
+            padded(drift) + 1.0e-12 * sizes + f64::MIN_POSITIVE,
+        )
     }
 
     /// An upper bound on how much the distance between a point within

@@ -250,10 +250,12 @@ fn a_local_frame_follows_its_parent() {
     }
 }
 
-/// The balls test's two bounds hold on the exact motion: a point of the
-/// frame stays within `reach` of the rotation centre however the body
-/// turns, and over a node the centres never come closer than
-/// `centres_gap` (fast spins, accelerated paths, nodes of every width).
+/// The balls test's bounds hold on the exact motion: a point of the frame
+/// stays within `reach` of the rotation centre however the body turns,
+/// over a node the centres never come closer than `centres_gap`, and a
+/// centre seen from a frame that does not turn strays no farther than
+/// `centre_seen_from` says (fast spins, accelerated paths, nodes of every
+/// width).
 #[test]
 fn balls_bound_the_exact_motion() {
     let mut rng = Rng::new(31);
@@ -275,6 +277,17 @@ fn balls_bound_the_exact_motion() {
             .unwrap()
         };
         let (a, b) = (motion(&mut rng, com[0]), motion(&mut rng, com[1]));
+        // A frame that slides without turning, for `centre_seen_from`.
+        let still = Motion::from_velocities(
+            Isometry3::from_parts(Translation3::from(rng.vector(3.0)), rng.rotation()),
+            Point3::from(rng.vector(3.0)),
+            rng.vector(150.0),
+            Vector3::zeros(),
+            DT,
+        )
+        .unwrap()
+        .with_acceleration(rng.vector(3000.0))
+        .unwrap();
         // The centre of mass is fixed in the body: where it is at `t`.
         let local_com = a.pose_at(0.0).inverse() * Point3::from(com[0]);
         let local_com_b = b.pose_at(0.0).inverse() * Point3::from(com[1]);
@@ -289,6 +302,16 @@ fn balls_bound_the_exact_motion() {
         let span = TimeSpan::new(lo, hi);
         let gap = a.centres_gap(&b, span);
         positive += usize::from(gap > 0.0);
+        assert!(a.centre_seen_from(&b, span).is_none(), "a turns");
+        let (seen, stray) = still.centre_seen_from(&a, span).unwrap();
+        for t in sample_times(span) {
+            let from_still = still.pose_at(t).inverse() * (a.pose_at(t) * local_com);
+            let off = (from_still.coords - seen).norm();
+            assert!(
+                off <= stray + 1e-12,
+                "case {case} τ = {t}: strays {off} > {stray}"
+            );
+        }
         for t in sample_times(span) {
             let (pa, pb) = (a.pose_at(t), b.pose_at(t));
             let (ca, cb) = (pa * local_com, pb * local_com_b);
