@@ -7,11 +7,10 @@
 //! the rotation series and the family's axes. Where one side does not turn
 //! (a wall, a floor's triangle, a sliding box), the other's ball is held
 //! against that side's own box instead, in its frame: tighter than its
-//! ball, and as cheap. It pays on the many nodes a
-//! fast spin is cut into (each turning up to half a radian) that lie far
-//! from the contact; on nodes that turn little the family's own axes are
-//! tight and the balls seldom prove what they cannot, so they are not
-//! asked there.
+//! ball, and as cheap. It pays on the many nodes a fast spin is cut into
+//! (each turning up to half a radian) that lie far from the contact; on
+//! nodes that turn little the family's own axes are tight and the balls
+//! seldom prove what they cannot, so they are not asked there.
 
 use super::pairs::PairContent;
 use crate::convert::vec_from_glam;
@@ -49,7 +48,8 @@ impl Balls {
     /// The balls of a leaf pair of shapes `a.1` and `b.1` in frames moving
     /// by `a.0` and `b.0`; `None` for a composite pair, a pair that never
     /// turns more than [`BALLS_TURN`] over the step (a side whose rotation
-    /// the family does not read counts as still), and unbounded shapes.
+    /// the family does not read, a ball's, counts as not turning), and
+    /// unbounded shapes.
     pub fn new(
         kind: &PairContent,
         a: (&Motion, &dyn Shape),

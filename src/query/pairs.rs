@@ -237,8 +237,12 @@ impl<E: Enclosure> GapSet<E> for PairSet<'_, E> {
         let (fa, fb) = (entry.a, entry.b);
         match &entry.kind {
             PairContent::Leaf(_, swapped) => {
-                // Most nodes of a fast spin, far from the contact, end here,
-                // with no pose enclosed.
+                // Balls apart over the node: the first alive axis takes
+                // their gap, a positive lower bound of the pair's, which
+                // proves the pair apart as a family's positive axis would
+                // (and, like a family stopping early, leaves the other axes
+                // unread). Most nodes of a fast spin, far from the contact,
+                // end here, with no pose enclosed.
                 let first = axes.trailing_zeros() as usize;
                 if let Some(balls) = &entry.balls
                     && let Some(gap) =
