@@ -92,6 +92,8 @@ pub(crate) struct SupportMap {
     last: Cell<Option<Vector3<f64>>>,
     /// The cores' closest points have a closed form (`core_direction`).
     closed_form: bool,
+    /// Some shape has its own axes for [`SupportMap::shallowest_axis`].
+    own_axes: bool,
 }
 
 impl fmt::Debug for SupportMap {
@@ -121,9 +123,18 @@ impl SupportMap {
     ) -> SupportMap {
         let pad = up(ORTHO_SLACK * up(up(a.extent() + b.extent()) + skin));
         let closed_form = has_closed_form(&a.core, &b.core);
+        let (face_a, face_b) = (face_normal(&a), face_normal(&b));
+        let axes = |c: &Core| {
+            matches!(
+                c,
+                Core::Cuboid(_) | Core::Cylinder { .. } | Core::Cone { .. }
+            )
+        };
+        let own_axes = axes(&a.core) || axes(&b.core);
         SupportMap {
-            face_a: face_normal(&a),
-            face_b: face_normal(&b),
+            face_a,
+            face_b,
+            own_axes,
             a,
             b,
             shape_a,
@@ -172,7 +183,7 @@ impl SupportMap {
                 simplex.reset(CsoPoint::from_shapes(&pos12, g1, g2, start));
                 match gjk::closest_points(&pos12, g1, g2, PREDICTION, true, &mut simplex) {
                     GJKResult::ClosestPoints(_, _, n) => Found::Apart(n),
-                    GJKResult::Intersection if depth && !coarse => {
+                    GJKResult::Intersection if depth && (!coarse || !self.own_axes) => {
                         match EPA::new().closest_points(&pos12, g1, g2, &simplex) {
                             Some((_, _, n)) => Found::Apart(n),
                             None => Found::Nothing,
@@ -227,12 +238,14 @@ impl SupportMap {
     }
 
     /// For overlapping shapes (at the poses `rel`, `b`'s in `a`'s frame):
-    /// of the shapes' own face and axis directions, the one along which
+    /// of the shapes' own face and axis directions (a box's faces, a
+    /// cylinder's or cone's axis), the one along which
     /// they overlap least, in `a`'s frame, pointing from `a` towards `b`.
     /// parry's penetration normal is that direction over *all* directions
     /// (its EPA, most of a cylinder query's cost); where a box face or a
     /// cylinder's axis meets the other shape, as it mostly does, the two
-    /// agree. `None` when neither shape has such a direction.
+    /// agree. `None` when neither shape has such a direction (hulls,
+    /// triangles, capsules: `own_axes` is false).
     fn shallowest_axis(&self, rel: &Isometry3<f64>) -> Option<Vector3<f64>> {
         const AXES: [[f64; 3]; 3] = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
         let own = |core: &Core| -> &'static [[f64; 3]] {
