@@ -441,11 +441,15 @@ impl Motion {
         self.displacement + self.bend
     }
 
+    /// True when the frame turns during the step (a turn below any length
+    /// scale, see `Spin::NEGLIGIBLE`, counts as none).
+    pub fn turns(&self) -> bool {
+        self.spin.is_some()
+    }
+
     /// True when the frame neither moves nor turns.
     pub fn is_fixed(&self) -> bool {
-        self.spin.is_none()
-            && self.displacement == Vector3::zeros()
-            && self.bend == Vector3::zeros()
+        !self.turns() && self.displacement == Vector3::zeros() && self.bend == Vector3::zeros()
     }
 
     /// An upper bound on how far any point within `radius` metres of the
@@ -475,7 +479,7 @@ impl Motion {
     /// from there over the span, metres; `None` when this frame turns (its
     /// coordinates then turn too).
     pub fn centre_seen_from(&self, other: &Motion, span: TimeSpan) -> Option<(Vector3<f64>, f64)> {
-        if self.spin.is_some() {
+        if self.turns() {
             return None;
         }
         // A frame that does not turn has its origin at `c(τ) + arm`.

@@ -99,10 +99,10 @@ impl Balls {
                 half: ((hi - lo) * 0.5).map(pad),
             }
         };
-        let still = |m: &Motion| m.rotation() == Vector3::zeros();
-        let (radii, still) = if still(b.0) {
+        // The side `centre_seen_from` can look from, if either.
+        let (radii, still) = if !b.0.turns() {
             (radius(a), Some(boxed(b.1, true)))
-        } else if still(a.0) {
+        } else if !a.0.turns() {
             (radius(b), Some(boxed(a.1, false)))
         } else {
             (up(radius(a) + radius(b)), None)
