@@ -625,7 +625,12 @@ impl Trajectory for Motion {
     fn pose<E: Enclosure>(&self, span: TimeSpan) -> Pose<E> {
         let tau = E::time(span);
         let center = self.center_at(tau);
-        let Some(spin) = &self.spin else {
+        // At the start itself the frame has not turned yet: its rotation is
+        // `R0`, exactly (every search asks there once, whether the pairs
+        // touch at the start; the turning branch costs a sine and twelve
+        // sums for it).
+        let start = span.lo == 0.0 && span.hi == 0.0;
+        let Some(spin) = self.spin.as_ref().filter(|_| !start) else {
             return Pose {
                 rotation: self.start_matrix.map(E::constant),
                 translation: center + self.arm.map(E::constant),
@@ -643,6 +648,7 @@ impl Trajectory for Motion {
         let center = self.center_at(tau);
         match &self.spin {
             None => center + self.arm.map(E::constant),
+            Some(_) if span.lo == 0.0 && span.hi == 0.0 => center + self.arm.map(E::constant),
             Some(_) if self.arm == Vector3::zeros() => center,
             Some(spin) => {
                 let (s, c, mag) = spin.angle_terms(tau);
