@@ -47,6 +47,12 @@ const DEEPER: f64 = 1.0e-4;
 /// Most samples a pair touching at the start takes over the step.
 pub(super) const MAX_TOUCH_SAMPLES: usize = 64;
 
+/// Halvings of the time between the last allowed sample and the first one
+/// deeper than allowed ([`touching_pair`]), and the share of that time they
+/// come down to (`2^BISECTIONS`).
+const BISECTIONS: usize = 12;
+const BISECTION_SHARE: f64 = (1u64 << BISECTIONS) as f64;
+
 /// A pair already touching at the start (apart by no more than `band`,
 /// `HandBack::touch_band`): rapier's contacts own it, unless it goes
 /// deeper than `HandBack::allowed_depth` or separates and comes back. Walks
@@ -140,9 +146,17 @@ pub(super) fn touching_pair(
             return Ok(None);
         }
         if -gap > allowed {
-            // Deeper than allowed: the last allowed time, by bisection.
+            // Deeper than allowed: the last allowed time, by bisection
+            // down to 2⁻¹² of the samples' spacing. A pair already too deep
+            // at that resolution after the last allowed sample (a body
+            // pressed into a wall at its allowed depth, sinking from the
+            // start) stops at that sample: asked first, it spares the
+            // bisection its twelve steps down to the same answer.
             let (mut ok, mut bad) = (prev, tau);
-            for _ in 0..12 {
+            let finest = prev + (tau - prev) / BISECTION_SHARE;
+            let sinks_at_once = finest > prev
+                && gap_at(s1, m1, s2, m2, finest, reach).is_none_or(|(g, _)| -g > allowed);
+            for _ in 0..if sinks_at_once { 0 } else { BISECTIONS } {
                 let mid = 0.5 * (ok + bad);
                 match gap_at(s1, m1, s2, m2, mid, reach) {
                     Some((g, _)) if -g <= allowed => ok = mid,
