@@ -21,6 +21,7 @@ use crate::motion::Motion;
 use crate::query::{QueryOptions, ShapeMotion, Toi};
 use crate::solve::RootStatus;
 use nalgebra::Vector3;
+use rapier3d::parry::math::Vector;
 use rapier3d::parry::shape::{Shape, SharedShape, TypedShape};
 
 /// Share of the skin a clamp at the true contact backs off (when rapier's
@@ -213,6 +214,77 @@ pub(crate) fn pair_approach_along(
     n: &Vector3<f64>,
 ) -> f64 {
     m1.relative_approach_along(n, reach(s1), m2, reach(s2))
+}
+
+/// Whether the pair gets at most `budget` (metres) deeper along `n` (unit,
+/// from the moving shape towards the target) over the step, from the
+/// points of the shapes' cores ([`Motion::points_approach_within`]): far
+/// tighter than [`pair_approach_along`] for a turning ball, capsule, box,
+/// triangle or small hull, whose farthest points do not all turn towards
+/// `n` at once. `false` for a turning shape of another kind.
+pub(crate) fn pair_points_approach_within(
+    moving: &ShapeMotion,
+    target: &ShapeMotion,
+    n: &Vector3<f64>,
+    budget: f64,
+) -> bool {
+    let points = |s: &ShapeMotion| {
+        if s.motion.turns() {
+            core_points(s.shape)
+        } else {
+            // Every point of a shape that does not turn advances alike.
+            Some(vec![Vector3::zeros()])
+        }
+    };
+    let (Some(p), Some(q)) = (points(moving), points(target)) else {
+        return false;
+    };
+    moving
+        .motion
+        .points_approach_within(n, &p, &target.motion, &q, budget)
+}
+
+/// Most points [`core_points`] gives (a hull with more is left to the
+/// other checks: the bound costs a sine per sample and a few flops per
+/// point).
+const MAX_CORE_POINTS: usize = 32;
+
+/// Points whose convex hull is the shape's core (the shape less its
+/// rounding), in its frame: a ball's centre, a capsule's or segment's
+/// ends, a box's corners, a triangle's or hull's vertices; `None` for
+/// curved cores (cylinders, cones), half-spaces and composite shapes.
+fn core_points(shape: &dyn Shape) -> Option<Vec<Vector3<f64>>> {
+    use TypedShape as T;
+    let f = |v: &Vector| Vector3::new(v.x as f64, v.y as f64, v.z as f64);
+    let corners = |h: &Vector| {
+        (0..8)
+            .map(|i| {
+                let sign = |bit: usize| if i >> bit & 1 == 0 { -1.0 } else { 1.0 };
+                Vector3::new(
+                    sign(0) * h.x as f64,
+                    sign(1) * h.y as f64,
+                    sign(2) * h.z as f64,
+                )
+            })
+            .collect()
+    };
+    let points: Vec<Vector3<f64>> = match shape.as_typed_shape() {
+        T::Ball(_) => vec![Vector3::zeros()],
+        T::Capsule(c) => vec![f(&c.segment.a), f(&c.segment.b)],
+        T::Segment(s) => vec![f(&s.a), f(&s.b)],
+        T::Cuboid(c) => corners(&c.half_extents),
+        T::RoundCuboid(r) => corners(&r.inner_shape.half_extents),
+        T::Triangle(t) => vec![f(&t.a), f(&t.b), f(&t.c)],
+        T::RoundTriangle(r) => {
+            let t = &r.inner_shape;
+            vec![f(&t.a), f(&t.b), f(&t.c)]
+        }
+        T::ConvexPolyhedron(p) => p.points().iter().map(f).collect(),
+        T::RoundConvexPolyhedron(r) => r.inner_shape.points().iter().map(f).collect(),
+        _ => return None,
+    };
+    (points.len() <= MAX_CORE_POINTS && points.iter().all(|p| p.iter().all(|x| x.is_finite())))
+        .then_some(points)
 }
 
 /// A hit at the true contact moved back along the motion by `back` metres

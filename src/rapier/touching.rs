@@ -4,8 +4,8 @@
 //! can be, sampled with parry's contact otherwise (see [`touching_pair`]).
 
 use super::backoff::{
-    BACKOFF, HandBack, back_off, pair_approach_along, pair_relative_travel, pair_travel, roundings,
-    stop_before_gap, stop_when_deep,
+    BACKOFF, HandBack, back_off, pair_approach_along, pair_points_approach_within,
+    pair_relative_travel, pair_travel, roundings, stop_before_gap, stop_when_deep,
 };
 use super::report::CcdReport;
 use super::search;
@@ -96,7 +96,13 @@ pub(super) fn touching_pair(
         // along it. A body sliding or resting on it, or bouncing off it,
         // is done here, without a query.
         let normal = vec_from_glam(c.normal1).normalize();
-        if pair_approach_along(s1, m1, s2, m2, &normal) <= allowed + gap0 {
+        let budget = allowed + gap0;
+        if pair_approach_along(s1, m1, s2, m2, &normal) <= budget {
+            return Ok(None);
+        }
+        // The same, point by point: a ball, capsule or box that spins as
+        // it bounces off or slides along the target.
+        if pair_points_approach_within(moving, target, &normal, budget) {
             return Ok(None);
         }
     }
