@@ -575,7 +575,8 @@ impl Motion {
     /// the farthest point each point starts (a capsule's far end may swing
     /// towards a wall it is nowhere near). The advances are sampled at up
     /// to 64 times and bounded between samples by their curvature: a
-    /// capsule bouncing off a wall while it spins is seen to leave it.
+    /// capsule bouncing off a wall while it spins is seen to leave it, even
+    /// with no budget at all (a pair held at its allowed depth).
     pub fn points_approach_within(
         &self,
         n: &Vector3<f64>,
@@ -584,36 +585,62 @@ impl Motion {
         other_points: &[Vector3<f64>],
         budget: f64,
     ) -> bool {
-        if points.is_empty() || other_points.is_empty() || budget.is_nan() || budget <= 0.0 {
+        if points.is_empty() || other_points.is_empty() || budget.is_nan() || budget < 0.0 {
             return false;
         }
         let ours = Advance::new(self, n, points);
         let theirs = Advance::new(other, &-n, other_points);
         // Each advance takes a few dozen roundings of terms no larger than
         // `size` (libm's sine and cosine within an ulp): 1e-12 of it
-        // covers them many times over.
+        // covers them many times over. The start's growth is 0 exactly.
         let slack = 1.0e-12 * (ours.size + theirs.size) + f64::MIN_POSITIVE;
-        let room = budget - slack;
-        // Between two samples each point's advance departs from the line
-        // through its sampled values by at most curvature·h²/8; the
-        // greatest of such lines per side, summed, is convex, so largest
-        // at a sample. Cells fine enough for that to cost at most half the
-        // room.
         let (lin, quad) = (ours.lin + theirs.lin, ours.quad + theirs.quad);
-        let curvature = ours.curvature + theirs.curvature + 2.0 * quad.abs();
-        let wanted = (curvature / (4.0 * room)).sqrt();
-        if room.is_nan() || room <= 0.0 || wanted.is_nan() || wanted > 64.0 {
-            return false;
-        }
-        let cells = wanted.ceil().max(2.0) as usize;
+        let turning = ours.curvature + theirs.curvature;
+        let curvature = turning + 2.0 * quad.abs();
+        // Cells fine enough for the interpolation bound below to cost at
+        // most half the budget, 2 to 64 of them.
+        let wanted = (curvature / (4.0 * budget.max(1.0e-4))).sqrt();
+        let cells = if wanted.is_finite() {
+            wanted.ceil().clamp(2.0, 64.0) as usize
+        } else {
+            64
+        };
         let h = 1.0 / cells as f64;
         let between = padded(curvature * h * h / 8.0);
-        // Every sample after the start (where the growth is 0).
-        (1..=cells).all(|k| {
-            let t = k as f64 * h;
-            let grown = lin * t + quad * t * t + ours.farthest_turn(t) + theirs.farthest_turn(t);
-            padded(grown.max(0.0)) + between <= room
-        })
+        let path = |t: f64| lin * t + quad * t * t;
+        let both = |t: f64| {
+            let (a, b) = (ours.farthest_turn(t, h), theirs.farthest_turn(t, h));
+            (a.0 + b.0, a.1 + b.1)
+        };
+        let mut before = 0.0f64;
+        let mut ahead = both(0.0);
+        for k in 1..=cells {
+            let (t0, t) = ((k - 1) as f64 * h, k as f64 * h);
+            // On each cell the greatest growth is at most the better of
+            // two convex bounds, each largest at an end: the lines through
+            // the samples plus curvature·h²/8, and the tangents at the
+            // left sample plus curvature·h²/2 (which also holds where the
+            // growth starts at 0 and the budget is 0: a pair leaving
+            // along `n`). The path's own tangent bound takes `|quad|`, so
+            // that it is convex too.
+            let here = both(t);
+            let now = path(t) + here.0;
+            let tangent = path(t0)
+                + (lin + 2.0 * quad * t0) * h
+                + quad.abs() * h * h
+                + ahead.1
+                + padded(turning * h * h / 2.0);
+            // `slack` covers the roundings of a sample; `up` the last sum.
+            let now = up(now + slack);
+            let lines = up(before.max(now) + between);
+            let tangents = before.max(up(tangent + slack));
+            if lines.min(tangents) > budget {
+                return false;
+            }
+            before = now;
+            ahead = here;
+        }
+        true
     }
 
     /// How far the turn alone moves a point within `radius` of the frame's
@@ -786,14 +813,19 @@ impl Advance {
         }
     }
 
-    /// The greatest advance of any point by the turn alone, less its start
-    /// behind the farthest, at `tau`.
-    fn farthest_turn(&self, tau: f64) -> f64 {
+    /// At `tau`: the greatest advance of any point by the turn alone, less
+    /// its start behind the farthest, and the greatest of the same plus its
+    /// rate times `h` (the tangents' values one cell on).
+    fn farthest_turn(&self, tau: f64, h: f64) -> (f64, f64) {
         let (s, c) = (self.phi * tau).sin_cos();
-        self.terms
-            .iter()
-            .map(|(a, b, behind)| a * s + b * (1.0 - c) - behind)
-            .fold(f64::NEG_INFINITY, f64::max)
+        self.terms.iter().fold(
+            (f64::NEG_INFINITY, f64::NEG_INFINITY),
+            |(value, tangent), (a, b, behind)| {
+                let g = a * s + b * (1.0 - c) - behind;
+                let rate = self.phi * (a * c + b * s);
+                (value.max(g), tangent.max(g + rate * h))
+            },
+        )
     }
 }
 

@@ -339,7 +339,7 @@ fn balls_bound_the_exact_motion() {
 #[test]
 fn points_approach_holds_the_exact_motion() {
     let mut rng = Rng::new(47);
-    let (mut checked, mut proved) = (0, 0);
+    let (mut checked, mut proved, mut leaving, mut left) = (0, 0, 0, 0);
     for case in 0..300 {
         let a = random_motion(&mut rng, 60.0);
         let b = if case % 3 == 0 {
@@ -385,7 +385,16 @@ fn points_approach_holds_the_exact_motion() {
         }
         let room = grown + 1.0e-3 + 0.05 * grown;
         proved += usize::from(a.points_approach_within(&n, &p, &b, &q, room));
+        if grown == 0.0 {
+            // Leaving along `n` from the start: no room needed.
+            leaving += 1;
+            left += usize::from(a.points_approach_within(&n, &p, &b, &q, 0.0));
+        }
     }
+    assert!(
+        leaving > 20 && left * 2 > leaving,
+        "{left} of {leaving} leaving pairs proved with no room"
+    );
     assert!(checked > 100, "only {checked} cases grew");
     assert!(
         proved > 200,
