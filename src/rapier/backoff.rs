@@ -392,20 +392,46 @@ pub(crate) fn stop_before_gap(
     // parry cannot tell: as if touching (earlier is always sound).
     let gap_of = |tau: f64| gap_at(s1, m1, s2, m2, tau, reach).map_or(f64::NEG_INFINITY, |g| g.0);
     let near = gap + TOLERANCE * slop;
-    if gap_of(from) <= near {
+    let start = gap_of(from);
+    if start <= near {
         return None;
     }
+    // Regula falsi on `gap_of(τ) − gap` (Illinois: the end kept twice in a
+    // row has its value halved), halving instead where the secant falls
+    // outside the bracket: the gap is smooth near a contact, and this
+    // takes a few of parry's distance queries where halving took up to
+    // all of its steps. The contact's own gap counts as 0.
     let (mut apart, mut close) = (from, toi.fraction);
+    let (mut f_apart, mut f_close) = (start - gap, -gap);
+    let mut kept_close = None;
     for _ in 0..BISECTIONS {
-        let mid = 0.5 * (apart + close);
-        let g = gap_of(mid);
+        let width = close - apart;
+        let secant = close - f_close * width / (f_close - f_apart);
+        let inside = apart + 1.0e-3 * width..=close - 1.0e-3 * width;
+        let t = if inside.contains(&secant) {
+            secant
+        } else {
+            apart + 0.5 * width
+        };
+        if !(apart < t && t < close) {
+            break;
+        }
+        let g = gap_of(t);
         if g > gap {
-            apart = mid;
+            (apart, f_apart) = (t, g - gap);
             if g <= gap + 1.0e-6 {
                 break;
             }
+            if kept_close == Some(true) {
+                f_close *= 0.5;
+            }
+            kept_close = Some(true);
         } else {
-            close = mid;
+            (close, f_close) = (t, if g.is_finite() { g - gap } else { -gap });
+            if kept_close == Some(false) {
+                f_apart *= 0.5;
+            }
+            kept_close = Some(false);
         }
     }
     Some(at_fraction(toi, apart))
