@@ -135,8 +135,11 @@ pub(super) fn touching_pair(
     let step = rules.sample_travel(s1);
     let samples = ((travel / step).ceil() as usize).clamp(4, MAX_TOUCH_SAMPLES);
     // parry's contact only needs to look as far as a sample can move: a
-    // larger prediction makes it visit every mesh part within it.
-    let reach = band.max(allowed) + travel / samples as f64 + 1.0e-3;
+    // larger prediction makes it visit every mesh part within it. A depth
+    // needs none (overlapping parts are always found), so a pair allowed
+    // deep (a blade jammed 17 cm into a wall) looks no farther than one
+    // allowed 5 mm.
+    let reach = band + travel / samples as f64 + 1.0e-3;
     let width = hi - lo;
     let mut prev = lo;
     for k in 1..=samples {
