@@ -49,9 +49,9 @@ pub(super) const MAX_TOUCH_SAMPLES: usize = 64;
 
 /// Halvings of the time between the last allowed sample and the first one
 /// deeper than allowed ([`touching_pair`]), and the share of that time they
-/// come down to (`2^BISECTIONS`).
-const BISECTIONS: usize = 12;
-const BISECTION_SHARE: f64 = (1u64 << BISECTIONS) as f64;
+/// come down to (`2^HALVINGS`).
+const HALVINGS: usize = 12;
+const HALVING_SHARE: f64 = (1u64 << HALVINGS) as f64;
 
 /// A pair already touching at the start (apart by no more than `band`,
 /// `HandBack::touch_band`): rapier's contacts own it, unless it goes
@@ -162,10 +162,10 @@ pub(super) fn touching_pair(
             // start) stops at that sample: asked first, it spares the
             // bisection its twelve steps down to the same answer.
             let (mut ok, mut bad) = (prev, tau);
-            let finest = prev + (tau - prev) / BISECTION_SHARE;
+            let finest = prev + (tau - prev) / HALVING_SHARE;
             let sinks_at_once = finest > prev
                 && gap_at(s1, m1, s2, m2, finest, reach).is_none_or(|(g, _)| -g > allowed);
-            for _ in 0..if sinks_at_once { 0 } else { BISECTIONS } {
+            for _ in 0..if sinks_at_once { 0 } else { HALVINGS } {
                 let mid = 0.5 * (ok + bad);
                 match gap_at(s1, m1, s2, m2, mid, reach) {
                     Some((g, _)) if -g <= allowed => ok = mid,
