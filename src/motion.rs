@@ -585,7 +585,14 @@ impl Motion {
         other_points: &[Vector3<f64>],
         budget: f64,
     ) -> bool {
-        if points.is_empty() || other_points.is_empty() || budget.is_nan() || budget < 0.0 {
+        let finite = |v: &Vector3<f64>| v.iter().all(|x| x.is_finite());
+        if points.is_empty()
+            || other_points.is_empty()
+            || budget.is_nan()
+            || budget < 0.0
+            || !finite(n)
+            || !points.iter().chain(other_points).all(finite)
+        {
             return false;
         }
         let ours = Advance::new(self, n, points);
@@ -634,7 +641,8 @@ impl Motion {
             let now = up(now + slack);
             let lines = up(before.max(now) + between);
             let tangents = before.max(up(tangent + slack));
-            if lines.min(tangents) > budget {
+            // (A NaN from overflowing terms proves nothing.)
+            if lines.is_nan() || tangents.is_nan() || lines.min(tangents) > budget {
                 return false;
             }
             before = now;

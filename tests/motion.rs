@@ -383,6 +383,11 @@ fn points_approach_holds_the_exact_motion() {
                 "case {case}: within {grown} though the motion grows that much"
             );
         }
+        let nan = Vector3::new(f64::NAN, 0.0, 0.0);
+        assert!(
+            !a.points_approach_within(&nan, &p, &b, &q, 1.0),
+            "NaN proves nothing"
+        );
         let room = grown + 1.0e-3 + 0.05 * grown;
         proved += usize::from(a.points_approach_within(&n, &p, &b, &q, room));
         if grown == 0.0 {
