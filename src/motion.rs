@@ -717,12 +717,7 @@ impl Trajectory for Motion {
     fn pose<E: Enclosure>(&self, span: TimeSpan) -> Pose<E> {
         let tau = E::time(span);
         let center = self.center_at(tau);
-        // At the start itself the frame has not turned yet: its rotation is
-        // `R0`, exactly (every search asks there once, whether the pairs
-        // touch at the start; the turning branch costs a sine and twelve
-        // sums for it).
-        let start = span.lo == 0.0 && span.hi == 0.0;
-        let Some(spin) = self.spin.as_ref().filter(|_| !start) else {
+        let Some(spin) = self.spin.as_ref().filter(|_| !at_start(span)) else {
             return Pose {
                 rotation: self.start_matrix.map(E::constant),
                 translation: center + self.arm.map(E::constant),
@@ -738,9 +733,8 @@ impl Trajectory for Motion {
     fn origin<E: Enclosure>(&self, span: TimeSpan) -> Vector3<E> {
         let tau = E::time(span);
         let center = self.center_at(tau);
-        match &self.spin {
+        match self.spin.as_ref().filter(|_| !at_start(span)) {
             None => center + self.arm.map(E::constant),
-            Some(_) if span.lo == 0.0 && span.hi == 0.0 => center + self.arm.map(E::constant),
             Some(_) if self.arm == Vector3::zeros() => center,
             Some(spin) => {
                 let (s, c, mag) = spin.angle_terms(tau);
@@ -760,6 +754,14 @@ impl Trajectory for Motion {
         let origin = center + turn * self.arm;
         Isometry3::from_parts(Translation3::from(origin), turn * self.start_rotation)
     }
+}
+
+/// Whether `span` is the start of the step itself, where a frame has not
+/// turned yet: its rotation is `R0` exactly (every search asks there once
+/// whether its pairs touch at the start, and the turning branch would cost
+/// a sine and twelve sums).
+fn at_start(span: TimeSpan) -> bool {
+    span.lo == 0.0 && span.hi == 0.0
 }
 
 /// The advance along a direction `n` of some points carried by a motion
