@@ -531,6 +531,18 @@ pub(crate) fn pushed_at_start(
             };
             let p1 = body.start * *local1;
             let p2 = pusher.start * *local2;
+            // Bounding spheres farther apart than `reach` cannot touch (a
+            // contact query costs far more; the pad covers `f32` poses).
+            let (s1, s2) = (
+                co1.shape().compute_bounding_sphere(&p1),
+                co2.shape().compute_bounding_sphere(&p2),
+            );
+            let apart =
+                (s1.center - s2.center).length() as f64 - (s1.radius as f64 + s2.radius as f64);
+            let scale = s1.center.abs().max(s2.center.abs()).max_element() as f64;
+            if apart > reach + 1.0e-5 + 1.0e-6 * scale {
+                continue;
+            }
             let Ok(Some(c)) =
                 crate::query::contact(&p2, co2.shape(), &p1, co1.shape(), reach as f32)
             else {
