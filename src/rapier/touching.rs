@@ -4,8 +4,9 @@
 //! can be, sampled with parry's contact otherwise (see [`touching_pair`]).
 
 use super::backoff::{
-    BACKOFF, HandBack, back_off, pair_approach_along, pair_points_approach_within,
-    pair_relative_travel, pair_travel, roundings, stop_before_gap, stop_when_deep,
+    BACKOFF, HandBack, back_off, mesh_points_within, pair_approach_along,
+    pair_points_approach_within, pair_relative_travel, pair_travel, roundings, stop_before_gap,
+    stop_when_deep,
 };
 use super::report::CcdReport;
 use super::search;
@@ -103,6 +104,11 @@ pub(super) fn touching_pair(
         // The same, point by point: a ball, capsule or box that spins as
         // it bounces off or slides along the target.
         if pair_points_approach_within(moving, target, &normal, budget) {
+            return Ok(None);
+        }
+        // A small mesh, from its vertices (its start overlap along the
+        // normal may exceed the depth of its deepest triangle).
+        if s2.as_halfspace().is_none() && mesh_points_within(moving, target, &normal, allowed) {
             return Ok(None);
         }
     }
