@@ -59,6 +59,10 @@ pub struct SceneReport {
     pub steps: usize,
     /// Median wall time of one step (milliseconds), the oracles excluded.
     pub median_step_ms: f64,
+    /// Wall time of all steps together (milliseconds), the oracles
+    /// excluded: where most steps are idle (a world that falls asleep), the
+    /// median is the idle step and this is what the busy ones cost.
+    pub total_step_ms: f64,
     /// Median wall time of one step less the backend's own CCD time
     /// (milliseconds), when the backend can measure it: what rapier's
     /// pipeline spent on this run's world. A backend that keeps bodies in
@@ -209,6 +213,7 @@ pub fn run_scene(
         missed_contacts,
         deep_ends,
         steps,
+        total_step_ms: times.iter().map(|d| d.as_secs_f64() * 1e3).sum(),
         median_step_ms: median_ms(&mut times),
         median_pipeline_ms: (!pipeline_times.is_empty()).then(|| median_ms(&mut pipeline_times)),
         ccd_ms: stepper.ccd_time().map(|d| d.as_secs_f64() * 1e3),
