@@ -61,16 +61,6 @@ const PREDICTION: f32 = 1.0e6;
 /// penetration normal (see `SupportMap::shallowest_axis`).
 const COARSE_NODE: f64 = 0.01;
 
-/// A shape whose border is flat pieces: a box, triangle, segment or
-/// convex polyhedron (no rounding).
-fn is_polyhedral(shape: &dyn Shape) -> bool {
-    use rapier3d::parry::shape::TypedShape as T;
-    matches!(
-        shape.as_typed_shape(),
-        T::Cuboid(_) | T::Triangle(_) | T::Segment(_) | T::ConvexPolyhedron(_)
-    )
-}
-
 /// What parry's GJK (and EPA) said of the shapes at one pose.
 enum Found {
     /// A direction from `a` towards `b` (`a`'s frame): the closest points'
@@ -102,7 +92,8 @@ pub(crate) struct SupportMap {
     last: Cell<Option<Vector3<f64>>>,
     /// parry's GJK simplex at the last closest-points query, and the
     /// relative pose it was at: the next query's start. Kept only when
-    /// `curved`, boxed so that the other pairs stay small to move.
+    /// `curved`; boxed so that the other pairs stay small to move, the box
+    /// made once and then written over.
     warm: RefCell<Option<Box<(VoronoiSimplex, ParryPose)>>>,
     /// Some shape is curved: GJK takes many steps to converge on it, and
     /// starting from the last simplex saves most of them. (Between two
@@ -151,7 +142,14 @@ impl SupportMap {
             )
         };
         let own_axes = axes(&a.core) || axes(&b.core);
-        let curved = !is_polyhedral(&*shape_a) || !is_polyhedral(&*shape_b);
+        let curved = |c: &Convex| {
+            c.border > 0.0
+                || matches!(
+                    c.core,
+                    Core::Point | Core::Cylinder { .. } | Core::Cone { .. }
+                )
+        };
+        let curved = curved(&a) || curved(&b);
         SupportMap {
             face_a,
             face_b,
@@ -169,22 +167,23 @@ impl SupportMap {
     }
 
     /// GJK's starting simplex at the relative pose `pos12`: the last
-    /// query's simplex carried to it where one is kept (`curved`), else
-    /// the shapes' difference's support point along `start`.
+    /// query's simplex `kept` (with its pose) carried to it, else the
+    /// shapes' difference's support point along `start`.
     ///
     /// A simplex's vertices are differences of points of the two shapes,
     /// kept in each shape's frame, so at any relative pose they are points
     /// of the shapes' difference; a nearby time's simplex is close to the
     /// answer, and GJK stops after a step or two instead of rebuilding it.
     fn first_simplex(
-        &self,
         pos12: &ParryPose,
         g1: &dyn rapier3d::parry::shape::SupportMap,
         g2: &dyn rapier3d::parry::shape::SupportMap,
         start: Vector,
+        kept: Option<&(VoronoiSimplex, ParryPose)>,
     ) -> VoronoiSimplex {
-        match self.warm.borrow_mut().take().map(|w| *w) {
-            Some((mut simplex, old12)) => {
+        match kept {
+            Some((simplex, old12)) => {
+                let mut simplex = simplex.clone();
                 let back = old12.inverse();
                 simplex.modify_pnts(&|p| {
                     *p = CsoPoint::new(p.orig1, *pos12 * (back * p.orig2));
@@ -233,7 +232,8 @@ impl SupportMap {
                 None => pos12.translation.try_normalize().unwrap_or(Vector::X),
             };
             let search = || {
-                let mut simplex = self.first_simplex(&pos12, g1, g2, start);
+                let mut kept = self.warm.borrow_mut().take();
+                let mut simplex = Self::first_simplex(&pos12, g1, g2, start, kept.as_deref());
                 let found =
                     match gjk::closest_points(&pos12, g1, g2, PREDICTION, true, &mut simplex) {
                         GJKResult::ClosestPoints(_, _, n) => Found::Apart(n),
@@ -247,7 +247,11 @@ impl SupportMap {
                         _ => Found::Nothing,
                     };
                 if self.curved {
-                    self.warm.replace(Some(Box::new((simplex, pos12))));
+                    match &mut kept {
+                        Some(slot) => **slot = (simplex, pos12),
+                        None => kept = Some(Box::new((simplex, pos12))),
+                    }
+                    self.warm.replace(kept);
                 }
                 found
             };
