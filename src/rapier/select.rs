@@ -14,7 +14,8 @@ use super::moved::{Moved, Start, angle_bound, angle_short, travel_bound};
 use super::report::{CcdReport, SkipReason};
 use super::turns::turn_hint;
 use rapier3d::parry::shape::{Shape, TypedShape};
-use rapier3d::prelude::{ColliderSet, RigidBody, RigidBodySet, Vector};
+use rapier3d::prelude::{ColliderSet, Pose, RigidBody, RigidBodySet, Vector};
+use std::f64::consts::PI;
 
 fn finite_vels(rb: &RigidBody) -> bool {
     rb.linvel().is_finite() && rb.angvel().is_finite()
@@ -97,12 +98,59 @@ pub(crate) fn body_thickness(rb: &RigidBody, colliders: &ColliderSet) -> f64 {
         .fold(f64::INFINITY, f64::min)
 }
 
+/// Whether `rb`, which moved from `start` to `end`, may tunnel: its
+/// fastest point went (or its velocity would take it) farther than
+/// `fast_factor` times its thickness within `horizon` (at least `dt`)
+/// seconds. The rotation counts as an arc (whole turns included, through
+/// the velocity term) instead of rapier's chord.
+///
+/// Most bodies that move are slow, so a cheap bound is tried first: the
+/// short angle is at most `π·|sin(angle/2)|` (no atan2) and rapier's
+/// `max_extent` bounds every collider's distance from the centre of mass
+/// (no walk over the colliders for it; rapier's step has just brought it
+/// up to date with any collider the user changed). Only a body that bound
+/// cannot clear gets the exact test, whose answer is then the one returned.
+fn tunnels(
+    rb: &RigidBody,
+    colliders: &ColliderSet,
+    start: &Pose,
+    end: &Pose,
+    dt: f64,
+    horizon: f64,
+    fast_factor: f64,
+) -> bool {
+    let com = rb.local_center_of_mass();
+    let shift = (*end * com - *start * com).length() as f64;
+    let spin = rb.angvel().length() as f64 * dt;
+    let (linvel, angvel) = (rb.linvel().length() as f64, rb.angvel().length() as f64);
+    let horizon = horizon.max(dt);
+    let allowed = fast_factor * body_thickness(rb, colliders);
+    // Cheap upper bound of the exact measure below, padded for rounding.
+    let dq = end.rotation * start.rotation.inverse();
+    let short_bound = PI * dq.xyz().length() as f64;
+    let reach = rb.mass_properties().max_extent() as f64;
+    let bound = (shift + reach * short_bound.max(spin)).max((linvel + angvel * reach) * horizon);
+    if bound * (1.0 + 1.0e-6) <= allowed {
+        return false;
+    }
+    let extent = turning_extent(rb, colliders);
+    // Arc length of the farthest point; the velocity term is rapier's.
+    let arc = shift + extent * angle_short(start, end).max(spin);
+    let by_velocity = (linvel + angvel * extent) * horizon;
+    arc.max(by_velocity) > allowed
+}
+
 /// The bodies of `starts` that moved during `dt` seconds, each marked fast
-/// or not. A body counts as fast when its velocity would take it across
-/// its thickness within `horizon` seconds (`dt`, or the whole step when
-/// `dt` is a piece of it: a body that tunnels over the step is swept in
-/// every piece, however short). A body whose end state is not finite is
-/// reported and left out.
+/// or not; none when no body is fast (nor a fast kinematic pusher), for
+/// then nothing is swept. A body counts as fast when its velocity would
+/// take it across its thickness within `horizon` seconds (`dt`, or the
+/// whole step when `dt` is a piece of it: a body that tunnels over the
+/// step is swept in every piece, however short). A body whose end state is
+/// not finite is reported and left out.
+///
+/// Two passes: the first only asks whether any body is fast, the second
+/// (seldom run) builds the records of every moved body, the targets the
+/// fast ones are swept against.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn moved(
     starts: &[Start],
@@ -115,45 +163,161 @@ pub(crate) fn moved(
     out: &mut Vec<Moved>,
 ) {
     out.clear();
+    let mut any_fast = false;
     for start in starts {
-        let Some(rb) = bodies.get(start.handle) else {
+        let Some((rb, end)) = moved_body(start, bodies) else {
             continue;
         };
-        if !rb.is_enabled() {
-            continue;
-        }
-        let end = *rb.position();
-        // Unmoved (a sleeping body, a resting one): nothing to check (a
-        // non-finite pose is never equal to itself).
-        if end == start.pose {
-            continue;
-        }
         if !end.is_finite() || !finite_vels(rb) {
             report.skip(start.handle, SkipReason::NonFinite);
             continue;
         }
+        if !any_fast
+            && may_flag(rb, config)
+            && tunnels(
+                rb,
+                colliders,
+                &start.pose,
+                &end,
+                dt,
+                horizon,
+                config.fast_factor,
+            )
+        {
+            any_fast = true;
+        }
+    }
+    if !any_fast {
+        return;
+    }
+    for start in starts {
+        let Some((rb, end)) = moved_body(start, bodies) else {
+            continue;
+        };
+        if !end.is_finite() || !finite_vels(rb) {
+            continue;
+        }
+        let tunnels = may_flag(rb, config)
+            && tunnels(
+                rb,
+                colliders,
+                &start.pose,
+                &end,
+                dt,
+                horizon,
+                config.fast_factor,
+            );
         let com = rb.local_center_of_mass();
         let shift = (end * com - start.pose * com).length() as f64;
         let extent = turning_extent(rb, colliders);
         let spin = rb.angvel().length() as f64 * dt;
         let short = angle_short(&start.pose, &end);
-        let travel = travel_bound(shift, extent, angle_bound(short, spin));
-        // Arc length of the farthest point; the velocity term is rapier's.
-        let arc = shift + extent * short.max(spin);
-        let by_velocity =
-            (rb.linvel().length() as f64 + rb.angvel().length() as f64 * extent) * horizon.max(dt);
-        let tunnels = arc.max(by_velocity) > config.fast_factor * body_thickness(rb, colliders);
-        let fast = rb.is_dynamic() && !config.opted_out(rb.user_data) && tunnels;
-        let pusher = rb.is_kinematic() && config.targets.kinematic && tunnels;
         out.push(Moved {
             handle: start.handle,
             start: start.pose,
             end,
             angvel: turn_hint(rb, &start.pose, &end, dt),
             accel: Vector::ZERO,
-            fast,
-            pusher,
-            travel,
+            fast: rb.is_dynamic() && tunnels,
+            pusher: rb.is_kinematic() && tunnels,
+            travel: travel_bound(shift, extent, angle_bound(short, spin)),
         });
+    }
+}
+
+/// The body of `start` and its pose now, if it is enabled and moved (a
+/// non-finite pose never equals itself, so it counts as moved).
+fn moved_body<'a>(start: &Start, bodies: &'a RigidBodySet) -> Option<(&'a RigidBody, Pose)> {
+    let rb = bodies.get(start.handle)?;
+    let end = *rb.position();
+    (rb.is_enabled() && end != start.pose).then_some((rb, end))
+}
+
+/// Whether `rb` can be marked fast (a dynamic body not opted out) or a
+/// pusher (a kinematic one, when kinematic targets are swept).
+fn may_flag(rb: &RigidBody, config: &CcdConfig) -> bool {
+    (rb.is_dynamic() && !config.opted_out(rb.user_data))
+        || (rb.is_kinematic() && config.targets.kinematic)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+    use rapier3d::prelude::{ColliderBuilder, RigidBodyBuilder, Rotation};
+
+    /// The exact measure `tunnels` compares with the allowed distance,
+    /// without its cheap first bound.
+    fn exact_measure(rb: &RigidBody, colliders: &ColliderSet, start: &Pose, end: &Pose) -> f64 {
+        let (dt, com) = (1.0 / 60.0, rb.local_center_of_mass());
+        let shift = (*end * com - *start * com).length() as f64;
+        let extent = turning_extent(rb, colliders);
+        let spin = rb.angvel().length() as f64 * dt;
+        let arc = shift + extent * angle_short(start, end).max(spin);
+        let by_velocity = (rb.linvel().length() as f64 + rb.angvel().length() as f64 * extent) * dt;
+        arc.max(by_velocity)
+    }
+
+    proptest! {
+        /// The cheap bound never clears a body the exact test would flag:
+        /// with the allowed distance set anywhere around the exact measure,
+        /// `tunnels` answers as the exact test does. Bodies of one ball, of
+        /// balls off the centre of mass (whose turning extent is their
+        /// centres'), and of a ball and a box.
+        #[test]
+        fn the_cheap_bound_agrees_with_the_exact_test(
+            body in 0usize..3,
+            at in prop::array::uniform3(-50.0f32..50.0),
+            axis in prop::array::uniform3(-1.0f32..1.0),
+            angle in -3.2f32..3.2,
+            turn in (prop::array::uniform3(-1.0f32..1.0), prop::sample::select(vec![0.0f32, 1.0e-4, 0.01, 0.5, 3.1])),
+            shift in prop::array::uniform3(-0.2f32..0.2),
+            linvel in prop::array::uniform3(-20.0f32..20.0),
+            angvel in prop::array::uniform3(-300.0f32..300.0),
+            slow in prop::sample::select(vec![0.0f32, 1.0e-3, 1.0]),
+            share in 0.5f64..2.0,
+        ) {
+            let (mut bodies, mut colliders) = (RigidBodySet::new(), ColliderSet::new());
+            let start = Pose::from_parts(
+                Vector::from(at),
+                Rotation::from_axis_angle(Vector::from(axis).normalize_or(Vector::Z), angle),
+            );
+            let handle = bodies.insert(
+                RigidBodyBuilder::dynamic()
+                    .pose(start)
+                    .linvel(Vector::from(linvel) * slow)
+                    .angvel(Vector::from(angvel) * slow),
+            );
+            let parts = match body {
+                0 => vec![ColliderBuilder::ball(0.3)],
+                1 => vec![
+                    ColliderBuilder::ball(0.2).translation(Vector::new(0.5, 0.1, 0.0)),
+                    ColliderBuilder::ball(0.1).translation(Vector::new(-0.3, 0.0, 0.4)).density(3.0),
+                ],
+                _ => vec![
+                    ColliderBuilder::ball(0.2).translation(Vector::new(0.0, 0.6, 0.0)),
+                    ColliderBuilder::cuboid(0.05, 0.4, 0.3),
+                ],
+            };
+            for part in parts {
+                colliders.insert_with_parent(part.build(), handle, &mut bodies);
+            }
+            // What rapier's step does for a body whose colliders changed
+            // (`max_extent` among it); `moved` runs after the step.
+            bodies[handle].recompute_mass_properties_from_colliders(&colliders);
+            let end = Pose::from_parts(
+                start.translation + Vector::from(shift),
+                Rotation::from_axis_angle(Vector::from(turn.0).normalize_or(Vector::X), turn.1)
+                    * start.rotation,
+            );
+            let rb = &bodies[handle];
+            let measure = exact_measure(rb, &colliders, &start, &end);
+            let thickness = body_thickness(rb, &colliders);
+            // The allowed distance anywhere from half the measure to twice it.
+            let fast_factor = measure * share / thickness;
+            let expected = measure > fast_factor * thickness;
+            let got = tunnels(rb, &colliders, &start, &end, 1.0 / 60.0, 1.0 / 60.0, fast_factor);
+            prop_assert_eq!(got, expected, "measure {} allowed {}", measure, fast_factor * thickness);
+        }
     }
 }
