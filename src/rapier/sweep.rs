@@ -441,8 +441,8 @@ pub(crate) fn sweep_body(
         ws.candidates.retain(|c| {
             let co2 = &scene.colliders[c.handle];
             meets(motions, c.handle, co2, &swept, |h2, co2| {
-                match cache.get_swept(motions, h2, co2, scene.bodies) {
-                    Ok((_, swept)) => Some(swept),
+                match cache.swept(motions, h2, co2, scene.bodies) {
+                    Ok(swept) => Some(swept),
                     Err(e) => {
                         failure = Some(e);
                         None
@@ -453,8 +453,8 @@ pub(crate) fn sweep_body(
         if let Some(e) = failure {
             return Err(e);
         }
-        let mut solid = Vec::new();
-        let mut handles = Vec::new();
+        let mut solid = Vec::with_capacity(ws.candidates.len());
+        let mut handles = Vec::with_capacity(ws.candidates.len());
         for c in &ws.candidates {
             let co2 = &scene.colliders[c.handle];
             let motion2 = ws.motions.get(motions, c.handle, co2, scene.bodies)?;

@@ -98,12 +98,25 @@ impl MotionCache {
         co: &Collider,
         bodies: &RigidBodySet,
     ) -> Result<(Motion, Aabb), CcdError> {
+        let swept = self.swept(motions, handle, co, bodies)?;
+        Ok((self.entry(motions, handle, co, bodies)?.motion, swept))
+    }
+
+    /// The box collider `handle` sweeps over the step, built once per body
+    /// motion (without copying the motion out: a broad-phase filter asks
+    /// for the boxes of every candidate and the motions of few).
+    pub fn swept(
+        &mut self,
+        motions: &StepMotions,
+        handle: ColliderHandle,
+        co: &Collider,
+        bodies: &RigidBodySet,
+    ) -> Result<Aabb, CcdError> {
         let built = self.entry(motions, handle, co, bodies)?;
-        let motion = built.motion;
-        let swept = *built
-            .swept
-            .get_or_insert_with(|| swept_aabb(co.shape(), &motion));
-        Ok((motion, swept))
+        Ok(match built.swept {
+            Some(swept) => swept,
+            None => *built.swept.insert(swept_aabb(co.shape(), &built.motion)),
+        })
     }
 
     fn entry(
