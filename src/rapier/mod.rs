@@ -75,6 +75,8 @@ pub struct AffineCcd {
     config: CcdConfig,
     report: CcdReport,
     starts: Vec<Start>,
+    /// The first pass of `select::moved`.
+    seen: Vec<select::Seen>,
     moved: Vec<Moved>,
     workspace: Workspace,
     /// Position-based kinematic targets of a step cut into pieces.
@@ -370,6 +372,7 @@ impl AffineCcd {
                 step_dt as f64,
                 &self.config,
                 &mut self.report,
+                &mut self.seen,
                 &mut self.moved,
             );
             if self.moved.iter().any(|m| m.fast || m.pusher) {

@@ -109,7 +109,8 @@ pub(crate) fn body_thickness(rb: &RigidBody, colliders: &ColliderSet) -> f64 {
 /// `max_extent` bounds every collider's distance from the centre of mass
 /// (no walk over the colliders for it; rapier's step has just brought it
 /// up to date with any collider the user changed). Only a body that bound
-/// cannot clear gets the exact test, whose answer is then the one returned.
+/// cannot clear gets the exact test, whose answer is then the one returned,
+/// with the short angle it computed (for the body's `travel`).
 fn tunnels(
     rb: &RigidBody,
     colliders: &ColliderSet,
@@ -118,7 +119,7 @@ fn tunnels(
     dt: f64,
     horizon: f64,
     fast_factor: f64,
-) -> bool {
+) -> (bool, Option<f64>) {
     let com = rb.local_center_of_mass();
     let shift = (*end * com - *start * com).length() as f64;
     let spin = rb.angvel().length() as f64 * dt;
@@ -131,13 +132,23 @@ fn tunnels(
     let reach = rb.mass_properties().max_extent() as f64;
     let bound = (shift + reach * short_bound.max(spin)).max((linvel + angvel * reach) * horizon);
     if bound * (1.0 + 1.0e-6) <= allowed {
-        return false;
+        return (false, None);
     }
     let extent = turning_extent(rb, colliders);
+    let short = angle_short(start, end);
     // Arc length of the farthest point; the velocity term is rapier's.
-    let arc = shift + extent * angle_short(start, end).max(spin);
+    let arc = shift + extent * short.max(spin);
     let by_velocity = (linvel + angvel * extent) * horizon;
-    arc.max(by_velocity) > allowed
+    (arc.max(by_velocity) > allowed, Some(short))
+}
+
+/// A moved body as the first pass of [`moved`] saw it: its index in the
+/// starts, whether it may tunnel, and its short angle if that was computed.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Seen {
+    start: u32,
+    tunnels: bool,
+    short: Option<f64>,
 }
 
 /// The bodies of `starts` that moved during `dt` seconds, each marked fast
@@ -148,9 +159,9 @@ fn tunnels(
 /// step is swept in every piece, however short). A body whose end state is
 /// not finite is reported and left out.
 ///
-/// Two passes: the first only asks whether any body is fast, the second
-/// (seldom run) builds the records of every moved body, the targets the
-/// fast ones are swept against.
+/// Two passes: the first tests every moved body into `seen`, the second
+/// (only when one is fast) builds their records, the targets the fast ones
+/// are swept against.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn moved(
     starts: &[Start],
@@ -160,11 +171,13 @@ pub(crate) fn moved(
     horizon: f64,
     config: &CcdConfig,
     report: &mut CcdReport,
+    seen: &mut Vec<Seen>,
     out: &mut Vec<Moved>,
 ) {
     out.clear();
+    seen.clear();
     let mut any_fast = false;
-    for start in starts {
+    for (i, start) in starts.iter().enumerate() {
         let Some((rb, end)) = moved_body(start, bodies) else {
             continue;
         };
@@ -172,9 +185,8 @@ pub(crate) fn moved(
             report.skip(start.handle, SkipReason::NonFinite);
             continue;
         }
-        if !any_fast
-            && may_flag(rb, config)
-            && tunnels(
+        let (tunnels, short) = if may_flag(rb, config) {
+            tunnels(
                 rb,
                 colliders,
                 &start.pose,
@@ -183,43 +195,37 @@ pub(crate) fn moved(
                 horizon,
                 config.fast_factor,
             )
-        {
-            any_fast = true;
-        }
+        } else {
+            (false, None)
+        };
+        any_fast |= tunnels;
+        seen.push(Seen {
+            start: i as u32,
+            tunnels,
+            short,
+        });
     }
     if !any_fast {
         return;
     }
-    for start in starts {
+    for s in seen.iter() {
+        let start = &starts[s.start as usize];
         let Some((rb, end)) = moved_body(start, bodies) else {
             continue;
         };
-        if !end.is_finite() || !finite_vels(rb) {
-            continue;
-        }
-        let tunnels = may_flag(rb, config)
-            && tunnels(
-                rb,
-                colliders,
-                &start.pose,
-                &end,
-                dt,
-                horizon,
-                config.fast_factor,
-            );
         let com = rb.local_center_of_mass();
         let shift = (end * com - start.pose * com).length() as f64;
         let extent = turning_extent(rb, colliders);
         let spin = rb.angvel().length() as f64 * dt;
-        let short = angle_short(&start.pose, &end);
+        let short = s.short.unwrap_or_else(|| angle_short(&start.pose, &end));
         out.push(Moved {
             handle: start.handle,
             start: start.pose,
             end,
             angvel: turn_hint(rb, &start.pose, &end, dt),
             accel: Vector::ZERO,
-            fast: rb.is_dynamic() && tunnels,
-            pusher: rb.is_kinematic() && tunnels,
+            fast: rb.is_dynamic() && s.tunnels,
+            pusher: rb.is_kinematic() && s.tunnels,
             travel: travel_bound(shift, extent, angle_bound(short, spin)),
         });
     }
@@ -316,7 +322,7 @@ mod tests {
             // The allowed distance anywhere from half the measure to twice it.
             let fast_factor = measure * share / thickness;
             let expected = measure > fast_factor * thickness;
-            let got = tunnels(rb, &colliders, &start, &end, 1.0 / 60.0, 1.0 / 60.0, fast_factor);
+            let (got, _) = tunnels(rb, &colliders, &start, &end, 1.0 / 60.0, 1.0 / 60.0, fast_factor);
             prop_assert_eq!(got, expected, "measure {} allowed {}", measure, fast_factor * thickness);
         }
     }
