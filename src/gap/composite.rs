@@ -420,10 +420,15 @@ pub(crate) fn swept<E: Enclosure>(rel: &Pose<E>, small: &Bounds) -> [Interval; 3
     // `carried`'s enclosed absolute values cost an affine operation each).
     let (c, h) = small.centre_half();
     let centre = rel.transform_point(&c);
+    // The box turned any way stays within its circumscribed sphere: a
+    // spinning box's bound `Σⱼ max|R_ij|·h_j` (up to √3 times that
+    // sphere's radius over a wide node) is capped by it.
+    let sphere = up(h.norm() * (1.0 + 4.0 * f64::EPSILON));
     std::array::from_fn(|i| {
         let reach = (0..3)
             .map(|j| up(rel.rotation[(i, j)].range().mag() * h[j]))
-            .fold(0.0, |sum, x| up(sum + x));
+            .fold(0.0, |sum, x| up(sum + x))
+            .min(sphere);
         let range = centre[i].range();
         Interval::new(down(range.lo - reach), up(range.hi + reach))
     })
@@ -509,4 +514,57 @@ pub(crate) fn check_leaves(
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::enclosure::{Affine, TimeSpan};
+    use crate::motion::{Motion, Trajectory};
+    use nalgebra::{Point3, Translation3};
+    use proptest::prelude::*;
+
+    proptest! {
+        /// The swept box holds the small side's box at every sampled time
+        /// of the node, however fast the small side spins relative to the
+        /// other (the circumscribed sphere caps its turned box).
+        #[test]
+        fn the_swept_box_holds_the_turning_box(
+            half in prop::array::uniform3(0.01f64..2.0),
+            offset in prop::array::uniform3(-1.0f64..1.0),
+            spin in prop::array::uniform3(-600.0f64..600.0),
+            other_spin in prop::array::uniform3(-50.0f64..50.0),
+            linvel in prop::array::uniform3(-30.0f64..30.0),
+            node in (0.0f64..1.0, 0.0f64..1.0),
+        ) {
+            let dt = 1.0 / 60.0;
+            let small = Bounds::of_points(&[
+                Vector3::from(offset) - Vector3::from(half),
+                Vector3::from(offset) + Vector3::from(half),
+            ]);
+            let start = Isometry3::from_parts(
+                Translation3::new(0.3, -0.2, 0.5),
+                UnitQuaternion::from_scaled_axis(Vector3::new(0.4, 1.0, -0.7)),
+            );
+            let m_small = Motion::from_velocities(start, Point3::new(0.1, 0.0, 0.2), Vector3::from(linvel), Vector3::from(spin), dt).unwrap();
+            let m_big = Motion::from_velocities(Isometry3::identity(), Point3::origin(), Vector3::zeros(), Vector3::from(other_spin), dt).unwrap();
+            let span = TimeSpan::new(node.0.min(node.1), node.0.max(node.1));
+            let (pb, ps) = (m_big.pose::<Affine>(span), m_small.pose::<Affine>(span));
+            let rel = pb.relative(&ps);
+            let sweep = swept(&rel, &small);
+            for k in 0..=32 {
+                let tau = span.lo + (span.hi - span.lo) * k as f64 / 32.0;
+                let rel_at = m_big.pose_at(tau).inv_mul(&m_small.pose_at(tau));
+                for corner in 0..8 {
+                    let p = Vector3::from_fn(|i, _| if corner >> i & 1 == 1 { small.hi[i] } else { small.lo[i] });
+                    let q = rel_at * Point3::from(p);
+                    for i in 0..3 {
+                        let slack = 1.0e-9 * (1.0 + q[i].abs());
+                        prop_assert!(sweep[i].lo - slack <= q[i] && q[i] <= sweep[i].hi + slack,
+                            "tau {tau} axis {i}: {} outside [{}, {}]", q[i], sweep[i].lo, sweep[i].hi);
+                    }
+                }
+            }
+        }
+    }
 }
