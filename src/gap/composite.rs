@@ -116,7 +116,7 @@ impl Bounds {
     }
 
     /// True when this box, grown by `skin`, meets the interval box `other`.
-    fn meets(&self, other: &[Interval; 3], skin: f64) -> bool {
+    pub(crate) fn meets(&self, other: &[Interval; 3], skin: f64) -> bool {
         !self.is_empty()
             && (0..3).all(|i| {
                 other[i].lo <= up(self.hi[i] + skin) && down(self.lo[i] - skin) <= other[i].hi

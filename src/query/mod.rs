@@ -247,6 +247,7 @@ impl Query {
                     a,
                     b,
                     balls,
+                    piece: None,
                     moving: i,
                     target: j,
                 });
