@@ -122,8 +122,8 @@ fn tunnels(
 ) -> (bool, Option<f64>) {
     let com = rb.local_center_of_mass();
     let shift = (*end * com - *start * com).length() as f64;
-    let spin = rb.angvel().length() as f64 * dt;
     let (linvel, angvel) = (rb.linvel().length() as f64, rb.angvel().length() as f64);
+    let spin = angvel * dt;
     let horizon = horizon.max(dt);
     let allowed = fast_factor * body_thickness(rb, colliders);
     // Cheap upper bound of the exact measure below, padded for rounding.

@@ -60,6 +60,16 @@ struct Built {
     swept: Option<Aabb>,
 }
 
+impl Built {
+    /// The box the collider sweeps, made on first need.
+    fn swept(&mut self, co: &Collider) -> Aabb {
+        let motion = &self.motion;
+        *self
+            .swept
+            .get_or_insert_with(|| swept_aabb(co.shape(), motion))
+    }
+}
+
 /// What a collider's motion is built from: its body's two poses, turn hint
 /// and acceleration, and the step length (`None`: the collider's body did
 /// not move, its motion is its pose).
@@ -98,8 +108,8 @@ impl MotionCache {
         co: &Collider,
         bodies: &RigidBodySet,
     ) -> Result<(Motion, Aabb), CcdError> {
-        let swept = self.swept(motions, handle, co, bodies)?;
-        Ok((self.entry(motions, handle, co, bodies)?.motion, swept))
+        let built = self.entry(motions, handle, co, bodies)?;
+        Ok((built.motion, built.swept(co)))
     }
 
     /// The box collider `handle` sweeps over the step, built once per body
@@ -112,11 +122,7 @@ impl MotionCache {
         co: &Collider,
         bodies: &RigidBodySet,
     ) -> Result<Aabb, CcdError> {
-        let built = self.entry(motions, handle, co, bodies)?;
-        Ok(match built.swept {
-            Some(swept) => swept,
-            None => *built.swept.insert(swept_aabb(co.shape(), &built.motion)),
-        })
+        Ok(self.entry(motions, handle, co, bodies)?.swept(co))
     }
 
     fn entry(
