@@ -282,25 +282,50 @@ impl Solver {
                 stats,
             });
         };
-        // Pairs touching at the very start: the answer, or left out.
+        // Pairs touching at the very start: the answer, or left out. A root
+        // whose clip already excludes the start needs no such check; one
+        // that does not is cut up with no more work, and the check waits for
+        // the first node to reach the start (depth-first, the earliest node
+        // is next): most often that node is proved apart, or its clip
+        // excludes the start, and the check is never made. (A single time,
+        // or a span no wider than `ε`, is checked at once.)
         let at_start = TimeSpan::new(span.lo, span.lo);
         let ignore = options.initial_contact == InitialContact::Ignore;
-        self.touching_at_start(gaps, at_start, (start, end), ignore, &mut out, &mut stats);
-        if !ignore && let Some(&pair) = self.ignored.first() {
-            return Ok(SolveOutcome {
-                status: RootStatus::InitiallyTouching,
-                time: span.lo,
-                pair: Some(pair as usize),
-                stats,
-            });
-        }
-        // The root's visit holds unless it saw pairs now left out.
-        let mut first = if self.ignored.is_empty() {
-            Some((root, root_node))
+        let mut start_open = root_node.span.lo <= span.lo;
+        let mut first = None;
+        if !start_open {
+            first = Some((root, root_node));
+        } else if span.width() > options.epsilon {
+            let clipped = root_node.span;
+            let (start, end) = (root_node.start, root_node.end);
+            if clipped.width() < RECLIP_SHARE * span.width() {
+                self.stack.push(Frame {
+                    span: clipped,
+                    start,
+                    end,
+                });
+            } else {
+                let pieces = pieces_for(clipped.width(), gaps.useful_width());
+                self.push_pieces(clipped, pieces, start, end);
+            }
         } else {
-            self.stack.push(root);
-            None
-        };
+            start_open = false;
+            self.touching_at_start(gaps, at_start, (start, end), ignore, &mut out, &mut stats);
+            if !ignore && let Some(&pair) = self.ignored.first() {
+                return Ok(SolveOutcome {
+                    status: RootStatus::InitiallyTouching,
+                    time: span.lo,
+                    pair: Some(pair as usize),
+                    stats,
+                });
+            }
+            // The root's visit holds unless it saw pairs now left out.
+            if self.ignored.is_empty() {
+                first = Some((root, root_node));
+            } else {
+                self.stack.push(root);
+            }
+        }
         loop {
             let (frame, node) = match first.take() {
                 Some(reused) => reused,
@@ -318,11 +343,36 @@ impl Solver {
                         });
                     }
                     let Some(node) = self.visit(gaps, frame, &mut out, &mut stats) else {
-                        continue; // every pair apart on this node
+                        // Every pair apart on this node (so at its start).
+                        start_open = false;
+                        continue;
                     };
                     (frame, node)
                 }
             };
+            if start_open {
+                // The first node to reach the start, which its clip did
+                // not exclude: the deferred check.
+                debug_assert!(frame.span.lo <= span.lo);
+                start_open = false;
+                if node.span.lo <= span.lo {
+                    let pairs = (frame.start, frame.end);
+                    self.touching_at_start(gaps, at_start, pairs, ignore, &mut out, &mut stats);
+                    if !ignore && let Some(&pair) = self.ignored.first() {
+                        return Ok(SolveOutcome {
+                            status: RootStatus::InitiallyTouching,
+                            time: span.lo,
+                            pair: Some(pair as usize),
+                            stats,
+                        });
+                    }
+                    if !self.ignored.is_empty() {
+                        // This visit saw pairs now left out: again.
+                        self.stack.push(frame);
+                        continue;
+                    }
+                }
+            }
             let clipped = node.span;
             // Report only a node that was itself evaluated at width ≤ ε, and
             // only once some pair is seen touching by its end (so the true

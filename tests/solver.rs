@@ -468,30 +468,56 @@ fn bad_parameters_are_typed_errors() {
 #[test]
 fn initial_contacts_are_reported_or_left_out() {
     use affine_ccd::InitialContact;
-    let mut set = PolySet {
-        useful: f64::INFINITY,
-        pairs: vec![
-            // Touching from the start (−0.1 + 0.05τ stays ≤ 0).
-            vec![[-0.1, 0.05, 0.0, 0.0]],
-            // Reaches zero at τ = 0.5.
-            vec![[0.5, -1.0, 0.0, 0.0]],
-        ],
-    };
-    let mut solver = Solver::new();
-    let report = SolveOptions::default();
-    let got = solve_in(Arithmetic::Affine, &mut solver, &mut set, &report).unwrap();
-    assert_eq!(got.status, RootStatus::InitiallyTouching);
-    assert_eq!((got.time, got.pair), (0.0, Some(0)));
-    let ignore = SolveOptions {
-        initial_contact: InitialContact::Ignore,
-        ..SolveOptions::default()
-    };
-    let got = solve_in(Arithmetic::Affine, &mut solver, &mut set, &ignore).unwrap();
-    assert_eq!(got.status, RootStatus::Hit);
-    assert_eq!(got.pair, Some(1));
-    assert!(
-        got.time <= 0.5 && 0.5 - got.time <= ignore.epsilon,
-        "{}",
-        got.time
-    );
+    // Touching from the start to the end (−0.1 + 0.05τ stays ≤ 0), or only
+    // for the first 1 % of the step (−0.01 + τ): the check at the start
+    // finds both, whether the search halves nodes or cuts them into pieces.
+    for touching in [[-0.1, 0.05, 0.0, 0.0], [-0.01, 1.0, 0.0, 0.0]] {
+        for useful in [f64::INFINITY, 0.1] {
+            let mut set = PolySet {
+                useful,
+                pairs: vec![
+                    vec![touching],
+                    // Reaches zero at τ = 0.5.
+                    vec![[0.5, -1.0, 0.0, 0.0]],
+                ],
+            };
+            let mut solver = Solver::new();
+            let report = SolveOptions::default();
+            let got = solve_in(Arithmetic::Affine, &mut solver, &mut set, &report).unwrap();
+            assert_eq!(got.status, RootStatus::InitiallyTouching);
+            assert_eq!((got.time, got.pair), (0.0, Some(0)));
+            let ignore = SolveOptions {
+                initial_contact: InitialContact::Ignore,
+                ..SolveOptions::default()
+            };
+            let got = solve_in(Arithmetic::Affine, &mut solver, &mut set, &ignore).unwrap();
+            assert_eq!(got.status, RootStatus::Hit);
+            assert_eq!(got.pair, Some(1));
+            assert!(
+                got.time <= 0.5 && 0.5 - got.time <= ignore.epsilon,
+                "{}",
+                got.time
+            );
+        }
+    }
+}
+
+#[test]
+fn a_pair_reaching_zero_just_after_the_start_is_a_hit_not_a_contact() {
+    // Apart at the start by 1e-3 and touching from τ = 1e-3 on: the start
+    // check must not call it initially touching, and the hit is on time.
+    for useful in [f64::INFINITY, 0.1] {
+        let mut set = PolySet {
+            useful,
+            pairs: vec![vec![[1.0e-3, -1.0, 0.0, 0.0]]],
+        };
+        let options = SolveOptions::default();
+        let got = solve_in(Arithmetic::Affine, &mut Solver::new(), &mut set, &options).unwrap();
+        assert_eq!(got.status, RootStatus::Hit);
+        assert!(
+            got.time <= 1.0e-3 && 1.0e-3 - got.time <= options.epsilon,
+            "{}",
+            got.time
+        );
+    }
 }
