@@ -287,15 +287,16 @@ impl Solver {
         // that does not is cut up with no more work, and the check waits for
         // the first node to reach the start (depth-first, the earliest node
         // is next): most often that node is proved apart, or its clip
-        // excludes the start, and the check is never made. (A single time,
-        // or a span no wider than `ε`, is checked at once.)
+        // excludes the start, and the check is never made. (A root that
+        // sees a pair touching from its start on, a single time, or a span
+        // no wider than `ε` is checked at once.)
         let at_start = TimeSpan::new(span.lo, span.lo);
         let ignore = options.initial_contact == InitialContact::Ignore;
         let mut start_open = root_node.span.lo <= span.lo;
         let mut first = None;
         if !start_open {
             first = Some((root, root_node));
-        } else if span.width() > options.epsilon {
+        } else if span.width() > options.epsilon && !root_node.touches_at_start {
             let clipped = root_node.span;
             let (start, end) = (root_node.start, root_node.end);
             if clipped.width() < RECLIP_SHARE * span.width() {
@@ -310,7 +311,8 @@ impl Solver {
             }
         } else {
             start_open = false;
-            self.touching_at_start(gaps, at_start, (start, end), ignore, &mut out, &mut stats);
+            let pairs = (root_node.start, root_node.end);
+            self.touching_at_start(gaps, at_start, pairs, ignore, &mut out, &mut stats);
             if !ignore && let Some(&pair) = self.ignored.first() {
                 return Ok(SolveOutcome {
                     status: RootStatus::InitiallyTouching,
@@ -668,6 +670,7 @@ impl Solver {
             span: clipped,
             certain,
             likely,
+            touches_at_start: e_certain.min(e_likely) <= -1.0,
             start: frame.end,
             end: self.arena.len(),
             earliest_pair,
@@ -693,6 +696,8 @@ struct Visited {
     /// A time within `span` by which a pair with adaptive axes likely
     /// touches (not yet confirmed).
     likely: Option<f64>,
+    /// Some pair surely or likely touches from the node's start on.
+    touches_at_start: bool,
     start: usize,
     end: usize,
     earliest_pair: usize,
