@@ -288,15 +288,21 @@ impl Solver {
         // the first node to reach the start (depth-first, the earliest node
         // is next): most often that node is proved apart, or its clip
         // excludes the start, and the check is never made. (A root that
-        // sees a pair touching from its start on, a single time, or a span
-        // no wider than `ε` is checked at once.)
+        // sees a pair touching from its start on, or a touch inside it (a
+        // certain one, or a likely one whose confirmation brackets the
+        // root), a single time, or a span no wider than `ε` is checked at
+        // once.)
         let at_start = TimeSpan::new(span.lo, span.lo);
         let ignore = options.initial_contact == InitialContact::Ignore;
         let mut start_open = root_node.span.lo <= span.lo;
         let mut first = None;
         if !start_open {
             first = Some((root, root_node));
-        } else if span.width() > options.epsilon && !root_node.touches_at_start {
+        } else if span.width() > options.epsilon
+            && !root_node.touches_at_start
+            && root_node.certain.is_none()
+            && root_node.likely.is_none()
+        {
             let clipped = root_node.span;
             let (start, end) = (root_node.start, root_node.end);
             if clipped.width() < RECLIP_SHARE * span.width() {
