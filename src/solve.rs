@@ -292,7 +292,6 @@ impl Solver {
         // certain one, or a likely one whose confirmation brackets the
         // root), a single time, or a span no wider than `ε` is checked at
         // once.)
-        let at_start = TimeSpan::new(span.lo, span.lo);
         let ignore = options.initial_contact == InitialContact::Ignore;
         let mut start_open = root_node.span.lo <= span.lo;
         let mut first = None;
@@ -318,14 +317,10 @@ impl Solver {
         } else {
             start_open = false;
             let pairs = (root_node.start, root_node.end);
-            self.touching_at_start(gaps, at_start, pairs, ignore, &mut out, &mut stats);
-            if !ignore && let Some(&pair) = self.ignored.first() {
-                return Ok(SolveOutcome {
-                    status: RootStatus::InitiallyTouching,
-                    time: span.lo,
-                    pair: Some(pair as usize),
-                    stats,
-                });
+            if let Some(touching) =
+                self.check_start(gaps, span, pairs, ignore, &mut out, &mut stats)
+            {
+                return Ok(touching);
             }
             // The root's visit holds unless it saw pairs now left out.
             if self.ignored.is_empty() {
@@ -365,14 +360,9 @@ impl Solver {
                 start_open = false;
                 if node.span.lo <= span.lo {
                     let pairs = (frame.start, frame.end);
-                    self.touching_at_start(gaps, at_start, pairs, ignore, &mut out, &mut stats);
-                    if !ignore && let Some(&pair) = self.ignored.first() {
-                        return Ok(SolveOutcome {
-                            status: RootStatus::InitiallyTouching,
-                            time: span.lo,
-                            pair: Some(pair as usize),
-                            stats,
-                        });
+                    let found = self.check_start(gaps, span, pairs, ignore, &mut out, &mut stats);
+                    if let Some(touching) = found {
+                        return Ok(touching);
                     }
                     if !self.ignored.is_empty() {
                         // This visit saw pairs now left out: again.
@@ -533,6 +523,32 @@ impl Solver {
             }
         }
         false
+    }
+
+    /// The check for pairs touching at the start of `span`, on
+    /// `arena[pairs.0..pairs.1]`: the answer when one is and they are
+    /// reported (`ignore == false`); otherwise `None`, with the pairs to
+    /// leave out in `self.ignored`.
+    fn check_start<E: Enclosure, G: GapSet<E>>(
+        &mut self,
+        gaps: &mut G,
+        span: TimeSpan,
+        pairs: (usize, usize),
+        ignore: bool,
+        out: &mut [E; MAX_AXES],
+        stats: &mut SolveStats,
+    ) -> Option<SolveOutcome> {
+        let at_start = TimeSpan::new(span.lo, span.lo);
+        self.touching_at_start(gaps, at_start, pairs, ignore, out, stats);
+        if ignore {
+            return None;
+        }
+        self.ignored.first().map(|&pair| SolveOutcome {
+            status: RootStatus::InitiallyTouching,
+            time: span.lo,
+            pair: Some(pair as usize),
+            stats: *stats,
+        })
     }
 
     /// The pairs in `arena[start..end]` (composites followed down to their
