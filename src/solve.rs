@@ -283,15 +283,13 @@ impl Solver {
             });
         };
         // Pairs touching at the very start: the answer, or left out. A root
-        // whose clip already excludes the start needs no such check; one
-        // that does not is cut up with no more work, and the check waits for
-        // the first node to reach the start (depth-first, the earliest node
-        // is next): most often that node is proved apart, or its clip
-        // excludes the start, and the check is never made. (A root that
-        // sees a pair touching from its start on, or a touch inside it (a
-        // certain one, or a likely one whose confirmation brackets the
-        // root), a single time, or a span no wider than `ε` is checked at
-        // once.)
+        // whose clip excludes the start needs no check. A root that sees no
+        // touch (none from its start on, none inside it) is cut up with no
+        // more work, and the check waits for the first node to reach the
+        // start (depth-first, the next one): most often that node is proved
+        // apart or clipped past the start, and the check is never made.
+        // Otherwise (a touch seen, whose confirmation may bracket the root;
+        // a span no wider than `ε`) the check is made at once.
         let ignore = options.initial_contact == InitialContact::Ignore;
         let mut start_open = root_node.span.lo <= span.lo;
         let mut first = None;
