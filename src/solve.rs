@@ -300,17 +300,14 @@ impl Solver {
             && root_node.certain.is_none()
             && root_node.likely.is_none()
         {
-            let clipped = root_node.span;
-            let (start, end) = (root_node.start, root_node.end);
-            if clipped.width() < RECLIP_SHARE * span.width() {
+            if !self.requeue(span.width(), &root_node, gaps.useful_width()) {
+                // Not reached (a root wider than `ε` splits); kept whole,
+                // it is reported at the floor.
                 self.stack.push(Frame {
-                    span: clipped,
-                    start,
-                    end,
+                    span: root_node.span,
+                    start: root_node.start,
+                    end: root_node.end,
                 });
-            } else {
-                let pieces = pieces_for(clipped.width(), gaps.useful_width());
-                self.push_pieces(clipped, pieces, start, end);
             }
         } else {
             start_open = false;
@@ -418,21 +415,9 @@ impl Solver {
                 }
                 continue;
             }
-            if clipped.width() < RECLIP_SHARE * frame.span.width() {
-                self.stack.push(Frame {
-                    span: clipped,
-                    start,
-                    end,
-                });
-                continue;
-            }
-            let mid = clipped.lo + 0.5 * clipped.width();
-            if !(clipped.lo < mid && mid < clipped.hi) {
-                // No float between the ends: the node cannot be split.
+            if !self.requeue(frame.span.width(), &node, gaps.useful_width()) {
                 return Ok(hit(clipped.lo, node.earliest_pair, stats));
             }
-            let pieces = pieces_for(clipped.width(), gaps.useful_width());
-            self.push_pieces(clipped, pieces, start, end);
         }
         Ok(SolveOutcome {
             status: RootStatus::Separated,
@@ -461,6 +446,28 @@ impl Solver {
                 axes: full_mask(n),
             });
         }
+        true
+    }
+
+    /// Queue a visited node that no bracket settled: its clipped span again
+    /// when clipping left less than [`RECLIP_SHARE`] of the `width` it was
+    /// visited at, else cut into pieces. `false` when it cannot be split
+    /// (no float between its ends).
+    fn requeue(&mut self, width: f64, node: &Visited, useful: f64) -> bool {
+        let (clipped, start, end) = (node.span, node.start, node.end);
+        if clipped.width() < RECLIP_SHARE * width {
+            self.stack.push(Frame {
+                span: clipped,
+                start,
+                end,
+            });
+            return true;
+        }
+        let mid = clipped.lo + 0.5 * clipped.width();
+        if !(clipped.lo < mid && mid < clipped.hi) {
+            return false;
+        }
+        self.push_pieces(clipped, pieces_for(clipped.width(), useful), start, end);
         true
     }
 
