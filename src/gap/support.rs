@@ -216,6 +216,53 @@ impl Convex {
         self.support(&d.map(Interval::point), norm).range().hi
     }
 
+    /// A point of the shape farthest along `d` (plain `f64`, no bound):
+    /// what a closest-points search (GJK) asks of it. `d` need not be
+    /// unit; a zero `d` gives some point of the shape.
+    pub fn support_point(&self, d: &Vector3<f64>) -> Vector3<f64> {
+        let farthest = |vs: &[Vector3<f64>]| {
+            let mut best = vs[0];
+            let mut reach = best.dot(d);
+            for v in &vs[1..] {
+                let r = v.dot(d);
+                if r > reach {
+                    (best, reach) = (*v, r);
+                }
+            }
+            best
+        };
+        let radial = |radius: f64| {
+            let r = Vector3::new(d.x, 0.0, d.z);
+            r.try_normalize(1.0e-300)
+                .map_or(Vector3::zeros(), |u| u * radius)
+        };
+        let core = match &self.core {
+            Core::Point => Vector3::zeros(),
+            Core::Cuboid(e) => {
+                Vector3::new(e.x.copysign(d.x), e.y.copysign(d.y), e.z.copysign(d.z))
+            }
+            Core::Segment(ps) => farthest(ps),
+            Core::Triangle(ps) => farthest(ps),
+            Core::Polyhedron(ps) => farthest(ps),
+            Core::Cylinder {
+                half_height,
+                radius,
+            } => radial(*radius) + Vector3::new(0.0, half_height.copysign(d.y), 0.0),
+            Core::Cone {
+                half_height,
+                radius,
+            } => {
+                let apex = Vector3::new(0.0, *half_height, 0.0);
+                let rim = radial(*radius) - apex;
+                if apex.dot(d) >= rim.dot(d) { apex } else { rim }
+            }
+        };
+        match d.try_normalize(1.0e-300) {
+            Some(u) if self.border > 0.0 => core + u * self.border,
+            _ => core,
+        }
+    }
+
     /// An upper bound of `|x|` over the shape (metres): how far it reaches
     /// from its frame's origin.
     pub fn extent(&self) -> f64 {
@@ -312,6 +359,15 @@ fn polyhedron_support<E: Enclosure>(vs: &[Vector3<f64>], d: &Vector3<E>) -> E {
     )
 }
 
+/// Our shapes as parry3d-f64's GJK sees them (the direction of a narrow
+/// node, `support_map::SupportMap::closest_f64`).
+impl parry3d_f64::shape::SupportMap for Convex {
+    fn local_support_point(&self, dir: parry3d_f64::math::Vector) -> parry3d_f64::math::Vector {
+        let p = self.support_point(&Vector3::new(dir.x, dir.y, dir.z));
+        parry3d_f64::math::Vector::new(p.x, p.y, p.z)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -343,6 +399,47 @@ mod tests {
                 let at = reach.c + reach.s * e + reach.r;
                 let rounding = 1.0e-12 * (1.0 + farthest.abs());
                 prop_assert!(farthest <= at + rounding, "e {e}: {farthest} > {at}");
+            }
+        }
+
+        /// `support_point` is a farthest point of the shape: along its own
+        /// direction it reaches the shape's reach `h(d)` (`support_f64`),
+        /// and along any other direction it reaches no farther than the
+        /// shape does (so it lies in the shape). Every core, with and
+        /// without a border, and zero components in `d` (a cylinder seen
+        /// along its axis).
+        #[test]
+        fn the_support_point_is_a_farthest_point(
+            kind in 0usize..7,
+            border in prop_oneof![Just(0.0f64), 0.01f64..0.5],
+            d in prop::array::uniform3(prop_oneof![Just(0.0f64), -2.0f64..2.0]),
+            others in prop::collection::vec(prop::array::uniform3(-1.0f64..1.0), 8),
+        ) {
+            let v = |x: f64, y: f64, z: f64| Vector3::new(x, y, z);
+            let core = match kind {
+                0 => Core::Point,
+                1 => Core::Cuboid(v(0.5, 0.2, 1.0)),
+                2 => Core::Segment([v(0.0, -0.4, 0.1), v(0.3, 0.4, -0.2)]),
+                3 => Core::Triangle([v(0.0, 0.0, 0.0), v(1.0, 0.2, 0.0), v(0.1, 0.9, 0.3)]),
+                4 => Core::Polyhedron(
+                    vec![v(1.0, 0.0, 0.0), v(-0.5, 0.8, 0.1), v(-0.4, -0.7, 0.2), v(0.0, 0.1, 0.9)]
+                        .into(),
+                ),
+                5 => Core::Cylinder { half_height: 0.4, radius: 0.3 },
+                _ => Core::Cone { half_height: 0.4, radius: 0.3 },
+            };
+            let shape = Convex { core, border };
+            let d = Vector3::from(d);
+            let p = shape.support_point(&d);
+            // `support_f64` is an upper bound: a cylinder's or cone's radial
+            // reach `sqrt(|d|² − d_y²)` from a rounded-up `|d|` is up to
+            // ~1e-8·|d| over (seen along the axis, where it is 0).
+            let rounding = 1.0e-7 * (1.0 + d.norm());
+            let reach = shape.support_f64(&d);
+            prop_assert!(p.dot(&d) >= reach - rounding, "{} below h(d) {}", p.dot(&d), reach);
+            for u in others.iter().map(|u| Vector3::from(*u)) {
+                let limit = shape.support_f64(&u) + 1.0e-12 * (1.0 + u.norm());
+                prop_assert!(p.dot(&u) <= limit, "{p:?} beyond the shape along {u:?}");
             }
         }
     }
