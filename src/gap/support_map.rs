@@ -85,6 +85,15 @@ enum Found {
     Nothing,
 }
 
+/// GJK simplices kept from the last queries of a pair, each with the
+/// relative pose it was at (see `SupportMap::first_simplex`): parry's `f32`
+/// one and the `f64` one of narrow nodes.
+#[derive(Clone, Default)]
+struct Warm {
+    f32: Option<(VoronoiSimplex, ParryPose)>,
+    f64: Option<(Simplex64, Pose64)>,
+}
+
 /// Two convex shapes, each a core plus a border.
 #[derive(Clone)]
 pub(crate) struct SupportMap {
@@ -104,13 +113,10 @@ pub(crate) struct SupportMap {
     face_b: Option<Vector3<f64>>,
     /// The direction (in `a`'s frame) of the last node evaluated.
     last: Cell<Option<Vector3<f64>>>,
-    /// parry's GJK simplex at the last closest-points query, and the
-    /// relative pose it was at: the next query's start. Kept only when
-    /// `curved`; boxed so that the other pairs stay small to move, the box
-    /// made once and then written over.
-    warm: RefCell<Option<Box<(VoronoiSimplex, ParryPose)>>>,
-    /// The same for the `f64` GJK of narrow nodes.
-    warm_f64: RefCell<Option<Box<(Simplex64, Pose64)>>>,
+    /// The GJK simplices of the last closest-points queries: the next
+    /// ones' start. Kept only when `curved`; boxed so that the other pairs
+    /// stay small to move, the box made once and then written over.
+    warm: RefCell<Option<Box<Warm>>>,
     /// Some shape is curved: GJK takes many steps to converge on it, and
     /// starting from the last simplex saves most of them. (Between two
     /// polyhedra it converges in a few steps from the last direction, and
@@ -177,7 +183,6 @@ impl SupportMap {
             skin: up(skin + pad),
             last: Cell::new(None),
             warm: RefCell::new(None),
-            warm_f64: RefCell::new(None),
             curved,
             closed_form,
         }
@@ -260,7 +265,8 @@ impl SupportMap {
             };
             let search = || {
                 let mut kept = self.warm.borrow_mut().take();
-                let mut simplex = Self::first_simplex(&pos12, g1, g2, start, kept.as_deref());
+                let last = kept.as_ref().and_then(|w| w.f32.as_ref());
+                let mut simplex = Self::first_simplex(&pos12, g1, g2, start, last);
                 let found =
                     match gjk::closest_points(&pos12, g1, g2, PREDICTION, true, &mut simplex) {
                         GJKResult::ClosestPoints(p1, p2, n) => {
@@ -276,12 +282,9 @@ impl SupportMap {
                         _ => Found::Nothing,
                     };
                 if self.curved {
-                    match &mut kept {
-                        Some(slot) => **slot = (simplex, pos12),
-                        None => kept = Some(Box::new((simplex, pos12))),
-                    }
-                    self.warm.replace(kept);
+                    kept.get_or_insert_with(Box::default).f32 = Some((simplex, pos12));
                 }
+                self.warm.replace(kept);
                 found
             };
             // As below: a panic in parry only costs the hint.
@@ -348,8 +351,8 @@ impl SupportMap {
             Rotation64::from_xyzw(q.i, q.j, q.k, q.w),
         );
         let search = || {
-            let mut kept = self.warm_f64.borrow_mut().take();
-            let mut simplex = match kept.as_deref() {
+            let mut kept = self.warm.borrow_mut().take();
+            let mut simplex = match kept.as_ref().and_then(|w| w.f64.as_ref()) {
                 Some((simplex, old12)) => {
                     // As in `first_simplex`: the kept vertices carried over.
                     let mut simplex = simplex.clone();
@@ -377,11 +380,8 @@ impl SupportMap {
                 true,
                 &mut simplex,
             );
-            match &mut kept {
-                Some(slot) => **slot = (simplex, pos12),
-                None => kept = Some(Box::new((simplex, pos12))),
-            }
-            self.warm_f64.replace(kept);
+            kept.get_or_insert_with(Box::default).f64 = Some((simplex, pos12));
+            self.warm.replace(kept);
             match found {
                 Gjk64Result::ClosestPoints(p1, p2, n) => Some((n, (p2 - p1).length())),
                 _ => None,
