@@ -1,5 +1,6 @@
-//! Conversions between rapier/parry's glam `f32` types and the `f64`
-//! nalgebra types of the core. `f32 → f64` is exact; `f64 → f32` rounds.
+//! Conversions between rapier/parry's glam `f32` types, parry3d-f64's
+//! glam `f64` types and the `f64` nalgebra types of the core. `f32 → f64`
+//! is exact; `f64 → f32` rounds.
 
 use nalgebra::{Isometry3, Point3, Quaternion, Translation3, UnitQuaternion, Vector3};
 use rapier3d::parry::math::{Pose, Vector};
@@ -42,4 +43,13 @@ pub fn pose_from_iso(iso: &Isometry3<f64>) -> Pose {
         rapier3d::parry::math::Rotation::from_xyzw(q.i as f32, q.j as f32, q.k as f32, q.w as f32)
             .normalize();
     Pose::from_parts(glam_from_vec(&iso.translation.vector), rotation)
+}
+
+/// An `f64` isometry as a parry3d-f64 pose (exact).
+pub fn pose64_from_iso(iso: &Isometry3<f64>) -> parry3d_f64::math::Pose {
+    let (q, t) = (iso.rotation.quaternion(), iso.translation.vector);
+    parry3d_f64::math::Pose::from_parts(
+        parry3d_f64::math::Vector::new(t.x, t.y, t.z),
+        parry3d_f64::math::Rotation::from_xyzw(q.i, q.j, q.k, q.w),
+    )
 }

@@ -40,12 +40,12 @@
 
 use super::Side;
 use super::support::{Convex, Core, ORTHO_SLACK, dot, norm_up, tr_mul};
-use crate::convert::{glam_from_vec, pose_from_iso, vec_from_glam};
+use crate::convert::{glam_from_vec, pose_from_iso, pose64_from_iso, vec_from_glam};
 use crate::enclosure::rounding::up;
 use crate::enclosure::{Enclosure, Interval, TimeSpan};
 use crate::motion::Trajectory;
 use nalgebra::{Isometry3, Vector3};
-use parry3d_f64::math::{Pose as Pose64, Rotation as Rotation64, Vector as Vec64};
+use parry3d_f64::math::{Pose as Pose64, Vector as Vec64};
 use parry3d_f64::query::gjk::{
     self as gjk64, CsoPoint as Cso64, GJKResult as Gjk64Result, VoronoiSimplex as Simplex64,
 };
@@ -221,36 +221,37 @@ impl SupportMap {
     }
 
     /// A unit direction from `a` towards `b`, in `a`'s frame, at the poses
-    /// `ia`, `ib`, and the shapes' distance when parry measured it. Never
-    /// fails: when parry has no answer, the direction of the frames'
-    /// origins, or any axis.
+    /// `ia`, `ib` of the middle of a node `width` wide (0: a single time),
+    /// and the shapes' distance when parry measured it. Never fails: when
+    /// parry has no answer, the direction of the frames' origins, or any
+    /// axis.
     ///
-    /// Without `depth` (a single time, where the search only asks whether
-    /// the shapes touch) overlapping shapes take the last direction instead
-    /// of parry's penetration normal: along every direction overlapping
-    /// shapes show as touching (the penetration normal is the one along
-    /// which they overlap *least*), and that normal's EPA was most of the
-    /// cost of a cylinder query. On a `coarse` node (wide: only its
-    /// clipping needs the direction) they take [`Self::shallowest_axis`].
-    /// On a `narrow` node a pair with a curved shape asks
+    /// At a single time (where the search only asks whether the shapes
+    /// touch) overlapping shapes take the last direction instead of parry's
+    /// penetration normal: along every direction overlapping shapes show as
+    /// touching (the penetration normal is the one along which they overlap
+    /// *least*), and that normal's EPA was most of the cost of a cylinder
+    /// query. On a node wider than [`COARSE_NODE`] (only its clipping needs
+    /// the direction) they take [`Self::shallowest_axis`]. On one narrower
+    /// than [`NARROW_NODE`] a pair with a curved shape asks
     /// [`Self::closest_f64`] first.
     fn direction(
         &self,
         ia: &Isometry3<f64>,
         ib: &Isometry3<f64>,
-        depth: bool,
-        coarse: bool,
-        narrow: bool,
+        width: f64,
     ) -> (Vector3<f64>, Option<f64>) {
+        let (depth, coarse) = (width > 0.0, width > COARSE_NODE);
         let rel = ia.inv_mul(ib);
         if let Some(n) = core_direction(&self.a.core, &self.b.core, &rel) {
             return (n, None);
         }
-        if narrow
+        if width > 0.0
+            && width < NARROW_NODE
             && self.curved
-            && let Some(found) = self.closest_f64(&rel)
+            && let Some(n) = self.closest_f64(&rel)
         {
-            return found;
+            return (n, None);
         }
         let pos12 = pose_from_iso(&rel);
         if let (Some(g1), Some(g2)) = (self.shape_a.as_support_map(), self.shape_b.as_support_map())
@@ -330,10 +331,11 @@ impl SupportMap {
     }
 
     /// The closest points' unit normal (from `a` towards `b`, in `a`'s
-    /// frame) and distance at the relative pose `rel`, by parry3d-f64's GJK
-    /// over our own shapes' support points, started from the last such
-    /// query's simplex; `None` when the shapes overlap (the caller's `f32`
-    /// query then runs EPA) or GJK has no answer.
+    /// frame) at the relative pose `rel`, by parry3d-f64's GJK over our own
+    /// shapes' support points, started from the last such query's simplex;
+    /// `None` when the shapes overlap (the caller's `f32` query then runs
+    /// EPA) or GJK has no answer. (Only nodes ask for it, so the distance,
+    /// which only single times read, is not returned.)
     ///
     /// parry's `f32` GJK stops once its distance bounds agree to about
     /// 0.3 % (and rounds in `f32`): its normal can be milliradians off,
@@ -343,13 +345,8 @@ impl SupportMap {
     /// that takes many more steps, so only narrow nodes, where a precise
     /// direction pays, ask for it (cylinder queries: 18 % fewer
     /// evaluations, 9 % fewer instructions).
-    fn closest_f64(&self, rel: &Isometry3<f64>) -> Option<(Vector3<f64>, Option<f64>)> {
-        let q = rel.rotation.quaternion();
-        let t = rel.translation.vector;
-        let pos12 = Pose64::from_parts(
-            Vec64::new(t.x, t.y, t.z),
-            Rotation64::from_xyzw(q.i, q.j, q.k, q.w),
-        );
+    fn closest_f64(&self, rel: &Isometry3<f64>) -> Option<Vector3<f64>> {
+        let pos12 = pose64_from_iso(rel);
         let search = || {
             let mut kept = self.warm.borrow_mut().take();
             let mut simplex = match kept.as_ref().and_then(|w| w.f64.as_ref()) {
@@ -383,16 +380,15 @@ impl SupportMap {
             kept.get_or_insert_with(Box::default).f64 = Some((simplex, pos12));
             self.warm.replace(kept);
             match found {
-                Gjk64Result::ClosestPoints(p1, p2, n) => Some((n, (p2 - p1).length())),
+                Gjk64Result::ClosestPoints(_, _, n) => Some(n),
                 _ => None,
             }
         };
         // As for parry's `f32` queries: a panic only costs the hint.
-        let (n, distance) = std::panic::catch_unwind(std::panic::AssertUnwindSafe(search))
+        let n = std::panic::catch_unwind(std::panic::AssertUnwindSafe(search))
             .ok()
             .flatten()?;
-        let n = Vector3::new(n.x, n.y, n.z).try_normalize(1.0e-9)?;
-        Some((n, Some(distance)))
+        Vector3::new(n.x, n.y, n.z).try_normalize(1.0e-9)
     }
 
     /// For overlapping shapes (at the poses `rel`, `b`'s in `a`'s frame):
@@ -468,13 +464,7 @@ impl SupportMap {
             }
         }
         let width = span.hi - span.lo;
-        let (m, distance) = self.direction(
-            &ia,
-            &ib,
-            width > 0.0,
-            width > COARSE_NODE,
-            width > 0.0 && width < NARROW_NODE,
-        );
+        let (m, distance) = self.direction(&ia, &ib, width);
         self.last.set(Some(m));
         let n = ia.rotation * m;
         if axes & 1 != 0 {
