@@ -17,10 +17,10 @@
 //! classic OBB form); the true `R` is a rotation, and the enclosure of the
 //! formula contains the formula at the true `R`.
 
-use super::Side;
+use super::Relative;
 use super::support::ORTHO_SLACK;
+use crate::enclosure::Enclosure;
 use crate::enclosure::rounding::up;
-use crate::enclosure::{Enclosure, TimeSpan};
 use crate::motion::{column, row};
 use nalgebra::Vector3;
 
@@ -57,15 +57,8 @@ impl CuboidCuboid {
         }
     }
 
-    pub fn eval<E: Enclosure>(
-        &self,
-        _span: TimeSpan,
-        a: &Side<E>,
-        b: &Side<E>,
-        axes: u64,
-        out: &mut [E],
-    ) {
-        let rel = a.pose.relative(b.pose);
+    pub fn eval<E: Enclosure>(&self, relative: &Relative<E>, axes: u64, out: &mut [E]) {
+        let rel = relative.b_in_a();
         let (r, t) = (rel.rotation, rel.translation);
         let abs = r.map(|x| x.abs());
         let (ea, eb) = (&self.half_a, &self.half_b);

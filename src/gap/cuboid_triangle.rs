@@ -12,10 +12,10 @@
 //! or a border, corners would count as close early (as for two boxes), so
 //! those pairs use the adaptive family.
 
-use super::Side;
+use super::Relative;
 use super::support::ORTHO_SLACK;
 use crate::enclosure::rounding::up;
-use crate::enclosure::{Enclosure, TimeSpan, least_greatest};
+use crate::enclosure::{Enclosure, least_greatest};
 use nalgebra::Vector3;
 
 #[derive(Clone, Debug)]
@@ -53,15 +53,8 @@ impl CuboidTriangle {
     }
 
     /// `a` is the cuboid, `b` the triangle.
-    pub fn eval<E: Enclosure>(
-        &self,
-        _span: TimeSpan,
-        a: &Side<E>,
-        b: &Side<E>,
-        axes: u64,
-        out: &mut [E],
-    ) {
-        let rel = a.pose.relative(b.pose);
+    pub fn eval<E: Enclosure>(&self, relative: &Relative<E>, axes: u64, out: &mut [E]) {
+        let rel = relative.b_in_a();
         let v = self.corners.map(|c| rel.transform_point(&c));
         let h = &self.half;
         // The gap along L given the triangle's projection `[lo, hi]` and the

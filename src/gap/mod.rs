@@ -70,6 +70,34 @@ pub(crate) struct Side<'p, E: Enclosure> {
     pub motion: &'p Motion,
 }
 
+/// Each side of a pair seen from the other over a node. Where many pairs
+/// share the same two frames (a box against each triangle of a mesh) the
+/// search keeps these once per node, not once per pair, and hands in those
+/// the family reads ([`PairGap::reads_relative`]); any other is computed
+/// from the sides when read.
+pub(crate) struct Relative<'p, E: Enclosure> {
+    pub a: &'p Pose<E>,
+    pub b: &'p Pose<E>,
+    pub b_in_a: Option<&'p Pose<E>>,
+    pub a_in_b: Option<&'p Pose<E>>,
+}
+
+impl<E: Enclosure> Relative<'_, E> {
+    /// `b`'s pose in `a`'s frame.
+    pub fn b_in_a(&self) -> Pose<E> {
+        self.b_in_a
+            .copied()
+            .unwrap_or_else(|| self.a.relative(self.b))
+    }
+
+    /// `a`'s pose in `b`'s frame.
+    pub fn a_in_b(&self) -> Pose<E> {
+        self.a_in_b
+            .copied()
+            .unwrap_or_else(|| self.b.relative(self.a))
+    }
+}
+
 /// The gap of one shape pair: its family and the family's parameters.
 #[derive(Clone, Debug)]
 pub(crate) enum PairGap {
@@ -114,6 +142,16 @@ impl PairGap {
         )
     }
 
+    /// Whether the family reads `b`'s pose in `a`'s frame and `a`'s in
+    /// `b`'s ([`Relative`]).
+    pub fn reads_relative(&self) -> [bool; 2] {
+        match self {
+            PairGap::CuboidCuboid(_) | PairGap::CuboidTriangle(_) => [true, false],
+            PairGap::TriangleTriangle(_) => [true, true],
+            _ => [false, false],
+        }
+    }
+
     /// Whether the family reads each side's rotation, `[a, b]`.
     pub fn reads_rotation(&self) -> [bool; 2] {
         match self {
@@ -128,12 +166,15 @@ impl PairGap {
     }
 
     /// Enclose the axes set in `axes` over `span` into `out`. A family may
-    /// stop early once an axis proves the pair apart ([`apart_by`]).
+    /// stop early once an axis proves the pair apart ([`apart_by`]). The
+    /// families that read one side's pose in the other's frame take it
+    /// from `relative`, which holds the same two poses as `a` and `b`.
     pub fn eval<E: Enclosure>(
         &self,
         span: TimeSpan,
         a: &Side<E>,
         b: &Side<E>,
+        relative: &Relative<E>,
         axes: u64,
         out: &mut [E],
     ) {
@@ -141,10 +182,10 @@ impl PairGap {
             PairGap::BallBall(g) => g.eval(span, a, b, axes, out),
             PairGap::BallTriangle(g) => g.eval(span, a, b, axes, out),
             PairGap::BallSegment(g) => g.eval(span, a, b, axes, out),
-            PairGap::TriangleTriangle(g) => g.eval(span, a, b, axes, out),
+            PairGap::TriangleTriangle(g) => g.eval(span, a, b, relative, axes, out),
             PairGap::BallCuboid(g) => g.eval(span, a, b, axes, out),
-            PairGap::CuboidCuboid(g) => g.eval(span, a, b, axes, out),
-            PairGap::CuboidTriangle(g) => g.eval(span, a, b, axes, out),
+            PairGap::CuboidCuboid(g) => g.eval(relative, axes, out),
+            PairGap::CuboidTriangle(g) => g.eval(relative, axes, out),
             PairGap::HalfSpace(g) => g.eval(span, a, b, axes, out),
             PairGap::SupportMap(g) => g.eval(span, a, b, axes, out),
         }

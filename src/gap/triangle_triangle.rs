@@ -22,10 +22,10 @@
 //! any direction is a valid axis as long as every projection along it is
 //! enclosed, and they are.
 
-use super::Side;
 use super::primitives::{
     closest_on_triangle, closest_segment_segment, cross, dot, skin_norm, skin_norm_const,
 };
+use super::{Relative, Side};
 use crate::enclosure::{Enclosure, TimeSpan, least_greatest};
 use crate::motion::{Pose, Trajectory};
 use nalgebra::{Isometry3, Vector3};
@@ -74,12 +74,13 @@ impl TriangleTriangle {
         span: TimeSpan,
         a: &Side<E>,
         b: &Side<E>,
+        relative: &Relative<E>,
         axes: u64,
         out: &mut [E],
     ) {
         let constant = |t: &[Vector3<f64>; 3]| t.map(|x| x.map(E::constant));
         if axes & 0b11 != 0 {
-            let b_in_a = corners(&a.pose.relative(b.pose), &self.b);
+            let b_in_a = corners(&relative.b_in_a(), &self.b);
             let d = self.normal_a.map(E::constant);
             let (plus, minus) = gaps(&d, &constant(&self.a), &b_in_a);
             let s = E::constant(skin_norm_const(&self.normal_a, self.skin));
@@ -90,7 +91,7 @@ impl TriangleTriangle {
             return;
         }
         let a_in_b = if axes >> 2 != 0 {
-            let rel = b.pose.relative(a.pose);
+            let rel = relative.a_in_b();
             Some((rel, corners(&rel, &self.a)))
         } else {
             None

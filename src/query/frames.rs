@@ -105,6 +105,22 @@ impl<E: Enclosure> Frames<E> {
         rel
     }
 
+    /// [`relative`](Frames::relative) from the two frames' poses on this
+    /// node, `pt` and `pf`, kept: the index to read it back by reference
+    /// with [`kept_relative`](Frames::kept_relative).
+    pub fn keep_relative(&mut self, to: u32, from: u32, pt: &Pose<E>, pf: &Pose<E>) -> usize {
+        if let Some(i) = self.relative.iter().position(|r| r.0 == to && r.1 == from) {
+            return i;
+        }
+        self.relative.push((to, from, pt.relative(pf)));
+        self.relative.len() - 1
+    }
+
+    /// A relative pose kept on this node by [`keep_relative`](Frames::keep_relative).
+    pub fn kept_relative(&self, kept: usize) -> &Pose<E> {
+        &self.relative[kept].2
+    }
+
     /// The frame of part `index` of a compound in frame `parent`.
     pub fn child(&mut self, parent: u32, index: u32, local: &Isometry3<f64>) -> u32 {
         if let Some(&f) = self.child_frames.get(&(parent, index)) {

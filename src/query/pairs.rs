@@ -6,7 +6,7 @@ use crate::enclosure::Interval;
 use crate::enclosure::{Enclosure, InArithmetic, TimeSpan};
 use crate::error::CcdError;
 use crate::gap::composite::{self, Bounds, PairSide, Region, SubRegion};
-use crate::gap::{self, PairGap, Side};
+use crate::gap::{self, PairGap, Relative, Side};
 use crate::solve::{GapSet, SolveOptions, SolveOutcome, Solver};
 use rapier3d::parry::shape::Shape;
 
@@ -317,7 +317,7 @@ impl<E: Enclosure> GapSet<E> for PairSet<'_, E> {
         let entry = &self.pairs[pair];
         let (fa, fb) = (entry.a, entry.b);
         match &entry.kind {
-            PairContent::Leaf(_, swapped) => {
+            PairContent::Leaf(gap, swapped) => {
                 // Balls apart over the node: the first alive axis takes
                 // their gap, a positive lower bound of the pair's, which
                 // proves the pair apart as a family's positive axis would
@@ -335,6 +335,22 @@ impl<E: Enclosure> GapSet<E> for PairSet<'_, E> {
                 }
                 let (fa, fb) = if *swapped { (fb, fa) } else { (fa, fb) };
                 let (pa, pb) = (self.frames.pose(fa, span), self.frames.pose(fb, span));
+                // The pieces of a split composite share their frames (a box
+                // against each triangle of a mesh): the relative poses their
+                // family reads are kept for the node. A pair of the
+                // caller's is the only one between its frames.
+                let [b_in_a, a_in_b] = match entry.piece {
+                    Some(_) => gap.reads_relative(),
+                    None => [false, false],
+                };
+                let b_in_a = b_in_a.then(|| self.frames.keep_relative(fa, fb, &pa, &pb));
+                let a_in_b = a_in_b.then(|| self.frames.keep_relative(fb, fa, &pb, &pa));
+                let relative = Relative {
+                    a: &pa,
+                    b: &pb,
+                    b_in_a: b_in_a.map(|kept| self.frames.kept_relative(kept)),
+                    a_in_b: a_in_b.map(|kept| self.frames.kept_relative(kept)),
+                };
                 let a = Side {
                     pose: &pa,
                     motion: self.frames.motion(fa),
@@ -343,9 +359,7 @@ impl<E: Enclosure> GapSet<E> for PairSet<'_, E> {
                     pose: &pb,
                     motion: self.frames.motion(fb),
                 };
-                if let PairContent::Leaf(gap, _) = &self.pairs[pair].kind {
-                    gap.eval(span, &a, &b, axes, out);
-                }
+                gap.eval(span, &a, &b, &relative, axes, out);
             }
             PairContent::Composite(c) => {
                 let (small, big) = if c.split_b { (c.a, c.b) } else { (c.b, c.a) };
