@@ -288,7 +288,18 @@ fn earliest_piece(
             alive.push(j);
             continue;
         }
-        match gap_at(moving.shape, &moving.motion, t.shape, &t.motion, lo, reach) {
+        // Only a pair within its band reads its start gap here: parry's
+        // contact need not look farther (a mesh's parts within a larger
+        // prediction would each be visited).
+        let band_reach = bands[j] + 1.0e-3;
+        match gap_at(
+            moving.shape,
+            &moving.motion,
+            t.shape,
+            &t.motion,
+            lo,
+            band_reach,
+        ) {
             Some(start) if start.0 <= bands[j] => {
                 if let Some(found) = close(j, start, report)? {
                     keep(found);

@@ -140,12 +140,16 @@ pub(super) fn touching_pair(
     }
     let step = rules.sample_travel(s1);
     let samples = ((travel / step).ceil() as usize).clamp(4, MAX_TOUCH_SAMPLES);
-    // parry's contact only needs to look as far as a sample can move: a
+    // A sample only tells deeper than allowed, within the band, or apart
+    // by more: parry's contact needs to look no farther than just past the
+    // band (a gap beyond comes back as `reach`, apart all the same), and a
     // larger prediction makes it visit every mesh part within it. A depth
     // needs none (overlapping parts are always found), so a pair allowed
     // deep (a blade jammed 17 cm into a wall) looks no farther than one
-    // allowed 5 mm.
-    let reach = band + travel / samples as f64 + 1.0e-3;
+    // allowed 5 mm. The witness of a stop looks as far as a sample can
+    // move, so that it finds the contact near the last allowed time.
+    let reach = band + 1.0e-3;
+    let witness_reach = reach + travel / samples as f64;
     let width = hi - lo;
     let mut prev = lo;
     for k in 1..=samples {
@@ -178,7 +182,7 @@ pub(super) fn touching_pair(
                     _ => bad = mid,
                 }
             }
-            let (_, found) = gap_at(s1, m1, s2, m2, ok, reach).unwrap_or((0.0, None));
+            let (_, found) = gap_at(s1, m1, s2, m2, ok, witness_reach).unwrap_or((0.0, None));
             let witness = found.map_or_else(
                 || Witness::origins(&m1.pose_at(ok), &m2.pose_at(ok)),
                 |c| Witness::of(&c),
