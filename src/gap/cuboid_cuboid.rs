@@ -17,8 +17,8 @@
 //! classic OBB form); the true `R` is a rotation, and the enclosure of the
 //! formula contains the formula at the true `R`.
 
-use super::Relative;
 use super::support::ORTHO_SLACK;
+use super::{Relative, Side};
 use crate::enclosure::Enclosure;
 use crate::enclosure::rounding::up;
 use crate::motion::{column, row};
@@ -57,8 +57,15 @@ impl CuboidCuboid {
         }
     }
 
-    pub fn eval<E: Enclosure>(&self, relative: &Relative<E>, axes: u64, out: &mut [E]) {
-        let rel = relative.b_in_a();
+    pub fn eval<E: Enclosure>(
+        &self,
+        a: &Side<E>,
+        b: &Side<E>,
+        relative: &Relative<E>,
+        axes: u64,
+        out: &mut [E],
+    ) {
+        let rel = relative.b_in_a(a, b);
         let (r, t) = (rel.rotation, rel.translation);
         let abs = r.map(|x| x.abs());
         let (ea, eb) = (&self.half_a, &self.half_b);

@@ -12,8 +12,8 @@
 //! or a border, corners would count as close early (as for two boxes), so
 //! those pairs use the adaptive family.
 
-use super::Relative;
 use super::support::ORTHO_SLACK;
+use super::{Relative, Side};
 use crate::enclosure::rounding::up;
 use crate::enclosure::{Enclosure, least_greatest};
 use nalgebra::Vector3;
@@ -53,8 +53,15 @@ impl CuboidTriangle {
     }
 
     /// `a` is the cuboid, `b` the triangle.
-    pub fn eval<E: Enclosure>(&self, relative: &Relative<E>, axes: u64, out: &mut [E]) {
-        let rel = relative.b_in_a();
+    pub fn eval<E: Enclosure>(
+        &self,
+        a: &Side<E>,
+        b: &Side<E>,
+        relative: &Relative<E>,
+        axes: u64,
+        out: &mut [E],
+    ) {
+        let rel = relative.b_in_a(a, b);
         let v = self.corners.map(|c| rel.transform_point(&c));
         let h = &self.half;
         // The gap along L given the triangle's projection `[lo, hi]` and the

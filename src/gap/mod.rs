@@ -70,31 +70,32 @@ pub(crate) struct Side<'p, E: Enclosure> {
     pub motion: &'p Motion,
 }
 
-/// Each side of a pair seen from the other over a node. Where many pairs
-/// share the same two frames (a box against each triangle of a mesh) the
-/// search keeps these once per node, not once per pair, and hands in those
-/// the family reads ([`PairGap::reads_relative`]); any other is computed
+/// Each side of a pair seen from the other over a node, where the search
+/// keeps them: where many pairs share the same two frames (a box against
+/// each triangle of a mesh), once per node instead of once per pair, those
+/// the family reads ([`PairGap::reads_relative`]). Any other is computed
 /// from the sides when read.
+#[derive(Clone, Copy)]
 pub(crate) struct Relative<'p, E: Enclosure> {
-    pub a: &'p Pose<E>,
-    pub b: &'p Pose<E>,
     pub b_in_a: Option<&'p Pose<E>>,
     pub a_in_b: Option<&'p Pose<E>>,
 }
 
 impl<E: Enclosure> Relative<'_, E> {
     /// `b`'s pose in `a`'s frame.
-    pub fn b_in_a(&self) -> Pose<E> {
-        self.b_in_a
-            .copied()
-            .unwrap_or_else(|| self.a.relative(self.b))
+    pub fn b_in_a(&self, a: &Side<E>, b: &Side<E>) -> Pose<E> {
+        match self.b_in_a {
+            Some(kept) => *kept,
+            None => a.pose.relative(b.pose),
+        }
     }
 
     /// `a`'s pose in `b`'s frame.
-    pub fn a_in_b(&self) -> Pose<E> {
-        self.a_in_b
-            .copied()
-            .unwrap_or_else(|| self.b.relative(self.a))
+    pub fn a_in_b(&self, a: &Side<E>, b: &Side<E>) -> Pose<E> {
+        match self.a_in_b {
+            Some(kept) => *kept,
+            None => b.pose.relative(a.pose),
+        }
     }
 }
 
@@ -168,7 +169,7 @@ impl PairGap {
     /// Enclose the axes set in `axes` over `span` into `out`. A family may
     /// stop early once an axis proves the pair apart ([`apart_by`]). The
     /// families that read one side's pose in the other's frame take it
-    /// from `relative`, which holds the same two poses as `a` and `b`.
+    /// from `relative` where it is kept.
     pub fn eval<E: Enclosure>(
         &self,
         span: TimeSpan,
@@ -184,8 +185,8 @@ impl PairGap {
             PairGap::BallSegment(g) => g.eval(span, a, b, axes, out),
             PairGap::TriangleTriangle(g) => g.eval(span, a, b, relative, axes, out),
             PairGap::BallCuboid(g) => g.eval(span, a, b, axes, out),
-            PairGap::CuboidCuboid(g) => g.eval(relative, axes, out),
-            PairGap::CuboidTriangle(g) => g.eval(relative, axes, out),
+            PairGap::CuboidCuboid(g) => g.eval(a, b, relative, axes, out),
+            PairGap::CuboidTriangle(g) => g.eval(a, b, relative, axes, out),
             PairGap::HalfSpace(g) => g.eval(span, a, b, axes, out),
             PairGap::SupportMap(g) => g.eval(span, a, b, axes, out),
         }

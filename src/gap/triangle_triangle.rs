@@ -80,7 +80,7 @@ impl TriangleTriangle {
     ) {
         let constant = |t: &[Vector3<f64>; 3]| t.map(|x| x.map(E::constant));
         if axes & 0b11 != 0 {
-            let b_in_a = corners(&relative.b_in_a(), &self.b);
+            let b_in_a = corners(&relative.b_in_a(a, b), &self.b);
             let d = self.normal_a.map(E::constant);
             let (plus, minus) = gaps(&d, &constant(&self.a), &b_in_a);
             let s = E::constant(skin_norm_const(&self.normal_a, self.skin));
@@ -91,7 +91,7 @@ impl TriangleTriangle {
             return;
         }
         let a_in_b = if axes >> 2 != 0 {
-            let rel = relative.a_in_b();
+            let rel = relative.a_in_b(a, b);
             Some((rel, corners(&rel, &self.a)))
         } else {
             None

@@ -116,6 +116,23 @@ impl<E: Enclosure> Frames<E> {
         self.relative.len() - 1
     }
 
+    /// [`keep_relative`](Frames::keep_relative) of `b` in `a` and of `a`
+    /// in `b` as `reads` asks, from their poses on this node. Kept out of
+    /// line: only a composite's pieces ask, and the evaluation of every
+    /// pair runs through its caller.
+    #[inline(never)]
+    pub fn keep_relatives(
+        &mut self,
+        reads: [bool; 2],
+        [a, b]: [u32; 2],
+        [pa, pb]: [&Pose<E>; 2],
+    ) -> [Option<usize>; 2] {
+        [
+            reads[0].then(|| self.keep_relative(a, b, pa, pb)),
+            reads[1].then(|| self.keep_relative(b, a, pb, pa)),
+        ]
+    }
+
     /// A relative pose kept on this node by [`keep_relative`](Frames::keep_relative).
     pub fn kept_relative(&self, kept: usize) -> &Pose<E> {
         &self.relative[kept].2

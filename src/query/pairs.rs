@@ -340,14 +340,13 @@ impl<E: Enclosure> GapSet<E> for PairSet<'_, E> {
                 // family reads are kept for the node. A pair of the
                 // caller's is the only one between its frames.
                 let [b_in_a, a_in_b] = match entry.piece {
-                    Some(_) => gap.reads_relative(),
-                    None => [false, false],
+                    Some(_) => {
+                        self.frames
+                            .keep_relatives(gap.reads_relative(), [fa, fb], [&pa, &pb])
+                    }
+                    None => [None, None],
                 };
-                let b_in_a = b_in_a.then(|| self.frames.keep_relative(fa, fb, &pa, &pb));
-                let a_in_b = a_in_b.then(|| self.frames.keep_relative(fb, fa, &pb, &pa));
                 let relative = Relative {
-                    a: &pa,
-                    b: &pb,
                     b_in_a: b_in_a.map(|kept| self.frames.kept_relative(kept)),
                     a_in_b: a_in_b.map(|kept| self.frames.kept_relative(kept)),
                 };
