@@ -96,22 +96,29 @@ impl<E: Enclosure> Frames<E> {
 
     /// The pose of frame `from` in frame `to`'s coordinates over the node.
     pub fn relative(&mut self, to: u32, from: u32, span: TimeSpan) -> Pose<E> {
-        if let Some((_, _, p)) = self.relative.iter().find(|r| r.0 == to && r.1 == from) {
-            return *p;
-        }
-        let (pt, pf) = (self.pose(to, span), self.pose(from, span));
-        let rel = pt.relative(&pf);
-        self.relative.push((to, from, rel));
-        rel
+        let kept = match self.find_relative(to, from) {
+            Some(kept) => kept,
+            None => {
+                let (pt, pf) = (self.pose(to, span), self.pose(from, span));
+                self.push_relative(to, from, &pt, &pf)
+            }
+        };
+        self.relative[kept].2
     }
 
     /// [`relative`](Frames::relative) from the two frames' poses on this
     /// node, `pt` and `pf`, kept: the index to read it back by reference
     /// with [`kept_relative`](Frames::kept_relative).
-    pub fn keep_relative(&mut self, to: u32, from: u32, pt: &Pose<E>, pf: &Pose<E>) -> usize {
-        if let Some(i) = self.relative.iter().position(|r| r.0 == to && r.1 == from) {
-            return i;
-        }
+    fn keep_relative(&mut self, to: u32, from: u32, pt: &Pose<E>, pf: &Pose<E>) -> usize {
+        self.find_relative(to, from)
+            .unwrap_or_else(|| self.push_relative(to, from, pt, pf))
+    }
+
+    fn find_relative(&self, to: u32, from: u32) -> Option<usize> {
+        self.relative.iter().position(|r| r.0 == to && r.1 == from)
+    }
+
+    fn push_relative(&mut self, to: u32, from: u32, pt: &Pose<E>, pf: &Pose<E>) -> usize {
         self.relative.push((to, from, pt.relative(pf)));
         self.relative.len() - 1
     }
