@@ -10,7 +10,7 @@ use super::candidates::{
 use super::moved::Moved;
 use super::report::CcdReport;
 use super::search;
-use super::touching::{gap_at, touching_pair};
+use super::touching::{gap_at, past_band, touching_pair};
 use super::world::{MotionCache, StageWorld, StepMotions};
 use crate::convert::pose_from_iso;
 use crate::enclosure::TimeSpan;
@@ -232,7 +232,9 @@ fn earliest_piece(
         .map(|(t, &travel)| rules.touch_band(moving, t, opts.skin, travel))
         .collect();
     let widest = bands.iter().copied().fold(opts.skin, f64::max);
-    // A small prediction finds the contact of a pair within its band, or
+    // For the pairs whose start gap is read beyond their band (those left
+    // to the contacts, and a pair found touching after all): a small
+    // prediction finds the contact of a pair within the widest band, or
     // within the allowed sinking (which `touching_pair` reads it for).
     let reach = widest.max(sink) + 1.0e-2;
     // A pair rapier's contacts own, within `band` at the start.
@@ -288,10 +290,8 @@ fn earliest_piece(
             alive.push(j);
             continue;
         }
-        // Only a pair within its band reads its start gap here: parry's
-        // contact need not look farther (a mesh's parts within a larger
-        // prediction would each be visited).
-        let band_reach = bands[j] + 1.0e-3;
+        // Only a pair within its band reads its start gap here.
+        let band_reach = past_band(bands[j]);
         match gap_at(
             moving.shape,
             &moving.motion,

@@ -41,6 +41,13 @@ pub(super) fn gap_at(
     }
 }
 
+/// How far parry's contact looks for a pair that reads its gap only to
+/// tell whether it is within `band` (metres): just past it, since a larger
+/// prediction makes a mesh contact visit every part within it.
+pub(super) fn past_band(band: f64) -> f64 {
+    band + 1.0e-3
+}
+
 /// How much deeper than allowed a rounded touching pair is stopped at,
 /// metres (see [`touching_pair`]).
 const DEEPER: f64 = 1.0e-4;
@@ -148,7 +155,7 @@ pub(super) fn touching_pair(
     // deep (a blade jammed 17 cm into a wall) looks no farther than one
     // allowed 5 mm. The witness of a stop looks as far as a sample can
     // move, so that it finds the contact near the last allowed time.
-    let reach = band + 1.0e-3;
+    let reach = past_band(band);
     let witness_reach = reach + travel / samples as f64;
     let width = hi - lo;
     let mut prev = lo;
