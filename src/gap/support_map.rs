@@ -522,11 +522,21 @@ impl SupportMap {
             along(&w) - self.a.support(&da, norm) - self.b.support_f64(&(-k)) - up(self.skin * norm)
         };
         let k = ib.rotation.inverse() * n;
+        // A side that does not turn holds its frame's direction fixed in
+        // the world: its axis is axis 0 again (against a floor or a wall,
+        // axis 2 of every node), so it takes axis 0's enclosure.
+        let world = (axes & 1 != 0).then_some(out[0]);
         if axes & 0b10 != 0 && !single {
-            out[1] = in_a(&m);
+            out[1] = match world.filter(|_| !a.motion.turns()) {
+                Some(same) => same,
+                None => in_a(&m),
+            };
         }
         if axes & 0b100 != 0 && !single {
-            out[2] = in_b(&k);
+            out[2] = match world.filter(|_| !b.motion.turns()) {
+                Some(same) => same,
+                None => in_b(&k),
+            };
         }
         // The face normals, fixed in their triangle's frame and turned to
         // point from `a` towards `b` at the node's middle.
