@@ -30,6 +30,9 @@
 //!    for `a`'s own support, right when `a` spins and `b` does not;
 //! 2. fixed in `b`'s frame: `n(τ) = R_b(τ)·k`, `k = R_b(mid)ᵀn`.
 //!
+//! (A side that does not turn, a floor or a wall, holds its direction
+//! fixed in the world: its axis is axis 0's, not evaluated again.)
+//!
 //! Cost: one closest-points computation per node (parry's GJK, and EPA
 //! when overlapping on a node narrower than 1 % of the step, unless the
 //! closed form applies) plus some 60
