@@ -211,6 +211,11 @@ const RECLIP_SHARE: f64 = 0.6;
 /// reported.
 const FLOOR_SHARE: f64 = 1.0 / 64.0;
 
+/// Where a converged start's touch is checked, as a share of `ε` after
+/// it (below one, so that the bracket it confirms is within `ε` after
+/// rounding).
+const PROBE_SHARE: f64 = 0.999;
+
 /// The most pieces one node is cut into at once.
 const MAX_PIECES: usize = 32;
 
@@ -393,6 +398,23 @@ impl Solver {
                 // to the left end", guarded by certainty).
                 let bracket = sure - clipped.lo;
                 if bracket <= options.epsilon {
+                    return Ok(hit(clipped.lo, node.earliest_pair, stats));
+                }
+                // The start has converged (this node's clip moved it, but
+                // by less than `ε`) while the confirmed time creeps towards
+                // it from above, a few times closer per node (a pair whose
+                // enclosure is wide, spinning or turning into contact): one
+                // touch check just inside `ε` after the start settles the
+                // bracket at once when the start is the root already. (A
+                // start the clip did not move at all has not converged,
+                // its bound is merely loose there: the check would fail.)
+                let moved = clipped.lo - frame.span.lo;
+                let probe = clipped.lo + PROBE_SHARE * options.epsilon;
+                if moved > 0.0
+                    && moved < options.epsilon
+                    && probe < sure
+                    && self.touching_at(gaps, probe, &node, &mut out, &mut stats)
+                {
                     return Ok(hit(clipped.lo, node.earliest_pair, stats));
                 }
                 // A bracket that kept most of the node is halved as well:
