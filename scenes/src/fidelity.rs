@@ -7,7 +7,10 @@
 //!   less than [`HELD_MOVE`] and turned less than [`HELD_TURN`] over the
 //!   step) while its velocity says it moves (faster than [`HELD_LINVEL`] or
 //!   [`HELD_ANGVEL`]), for [`HELD_RUN`] steps in a row or more. Every
-//!   body-step of such a run counts.
+//!   body-step of such a run counts, unless rapier alone (CCD off), taking
+//!   that step from the same state, holds the body too: the runner replays
+//!   each counted step to tell (rapier's solver holds a box rattling in a
+//!   corner whatever the backend).
 //! - **rest** ([`rest_gap`]): in scenes whose bodies settle, how far each
 //!   body's final pose is from rapier's own (same scene, same steps).
 //! - **energy** ([`EnergyMeter`]): the largest rise over one step of the
@@ -60,38 +63,44 @@ pub fn is_held(before: &BodyState, after: &BodyState) -> bool {
 /// Counts the body-steps of runs of at least [`HELD_RUN`] held steps.
 #[derive(Clone, Debug, Default)]
 pub struct FrozenCounter {
-    /// Length of the current run of held steps, per body.
-    runs: HashMap<RigidBodyHandle, usize>,
-    /// Body-steps counted so far.
-    pub count: usize,
+    /// The steps of the current run of held steps, per body.
+    runs: HashMap<RigidBodyHandle, Vec<usize>>,
+    /// The body-steps counted so far: step index and body.
+    pub counted: Vec<(usize, RigidBodyHandle)>,
 }
 
 impl FrozenCounter {
-    /// Records whether `body` was held over the step that just ran.
-    pub fn observe(&mut self, body: RigidBodyHandle, held: bool) {
+    /// Body-steps counted so far.
+    pub fn count(&self) -> usize {
+        self.counted.len()
+    }
+
+    /// Records whether `body` was held over step `step`, the one that just
+    /// ran.
+    pub fn observe(&mut self, body: RigidBodyHandle, step: usize, held: bool) {
         if !held {
             self.runs.remove(&body);
             return;
         }
-        let run = self.runs.entry(body).or_insert(0);
-        *run += 1;
-        if *run == HELD_RUN {
+        let run = self.runs.entry(body).or_default();
+        run.push(step);
+        if run.len() == HELD_RUN {
             // The run just became long enough: all its steps count.
-            self.count += HELD_RUN;
-        } else if *run > HELD_RUN {
-            self.count += 1;
+            self.counted.extend(run.iter().map(|&s| (s, body)));
+        } else if run.len() > HELD_RUN {
+            self.counted.push((step, body));
         }
     }
 
-    /// Observes every body dynamic at both ends of the step.
-    pub fn check_step(&mut self, before: &Snapshot, after: &Snapshot) {
+    /// Observes every body dynamic at both ends of step `step`.
+    pub fn check_step(&mut self, before: &Snapshot, after: &Snapshot, step: usize) {
         for (&handle, end) in &after.bodies {
             let Some(start) = before.bodies.get(&handle) else {
                 continue;
             };
             let dynamic = start.body_type == RigidBodyType::Dynamic
                 && end.body_type == RigidBodyType::Dynamic;
-            self.observe(handle, dynamic && is_held(start, end));
+            self.observe(handle, step, dynamic && is_held(start, end));
         }
     }
 }
@@ -595,16 +604,18 @@ mod tests {
         ));
         let mut counter = FrozenCounter::default();
         // Nine held steps, a free one: nothing.
-        for _ in 0..9 {
-            counter.observe(body, is_held(&held_start, &held_end));
+        for step in 0..9 {
+            counter.observe(body, step, is_held(&held_start, &held_end));
         }
-        counter.observe(body, is_held(&held_start, &moving_end));
-        assert_eq!(counter.count, 0);
-        // Twelve held steps: all twelve count.
-        for _ in 0..12 {
-            counter.observe(body, is_held(&held_start, &held_end));
+        counter.observe(body, 9, is_held(&held_start, &moving_end));
+        assert_eq!(counter.count(), 0);
+        // Twelve held steps: all twelve count, each with its step.
+        for step in 10..22 {
+            counter.observe(body, step, is_held(&held_start, &held_end));
         }
-        assert_eq!(counter.count, 12);
+        assert_eq!(counter.count(), 12);
+        let steps: Vec<usize> = counter.counted.iter().map(|&(s, _)| s).collect();
+        assert_eq!(steps, (10..22).collect::<Vec<_>>());
     }
 
     #[test]
@@ -733,10 +744,10 @@ mod tests {
         assert!(deflected(&world, &before, &after).is_empty());
         assert!(deflected(&world, &after, &after).is_empty());
         let mut frozen = FrozenCounter::default();
-        for _ in 0..20 {
-            frozen.check_step(&after, &after);
+        for step in 0..20 {
+            frozen.check_step(&after, &after, step);
         }
-        assert_eq!(frozen.count, 0);
+        assert_eq!(frozen.count(), 0);
         let mut meter = EnergyMeter::default();
         let (e0, e1) = step_energies(&before, &after, Vector::ZERO);
         meter.observe_step(e0, e1);

@@ -9,6 +9,7 @@ use super::guard::GuardWatch;
 use super::snapshot::{BodyState, Snapshot};
 use super::svg::Trace;
 use rapier3d::prelude::{PhysicsWorld, Real, RigidBodyHandle, Vector};
+use std::collections::BTreeMap;
 use std::fmt;
 use std::time::{Duration, Instant};
 
@@ -76,7 +77,9 @@ pub struct SceneReport {
     /// The drawing material, when asked for.
     pub trace: Option<Trace>,
     /// Body-steps a dynamic body was held while its velocity said it moves,
-    /// in runs of at least [`fidelity::HELD_RUN`] steps ([`FrozenCounter`]).
+    /// in runs of at least [`fidelity::HELD_RUN`] steps ([`FrozenCounter`]),
+    /// and not held when rapier alone (CCD off) takes that step from the
+    /// same state (see `held_by_backend`).
     pub frozen: usize,
     /// Body-steps whose free path touched nothing but whose velocity the
     /// step changed ([`fidelity::deflected`]).
@@ -191,7 +194,7 @@ pub fn run_scene(
             }
         }
         let after = Snapshot::take(&world);
-        frozen.check_step(&before, &after);
+        frozen.check_step(&before, &after, step);
         deflected += fidelity::deflected(&world, &before, &after).len();
         if closed {
             let (e0, e1) = fidelity::step_energies(&before, &after, world.gravity);
@@ -219,7 +222,7 @@ pub fn run_scene(
         ccd_ms: stepper.ccd_time().map(|d| d.as_secs_f64() * 1e3),
         profile: stepper.profile(),
         trace,
-        frozen: frozen.count,
+        frozen: held_by_backend(scene, backend, options, &frozen.counted),
         deflected,
         energy: closed.then_some(energy),
         settles: scene.effects.settles,
@@ -228,6 +231,89 @@ pub fn run_scene(
         up: (-world.gravity).try_normalize().unwrap_or(Vector::Y),
         rest: None,
     })
+}
+
+/// How many of the held body-steps `counted` ([`FrozenCounter`]) are the
+/// backend's doing: each such step is taken again from the same state (the
+/// scene replayed up to it under the same backend) by rapier with its CCD
+/// off, and a body rapier alone holds there too is rapier's, not the
+/// backend's (a box rattling in a corner, its spin reversing every step,
+/// is held by rapier's solver under any backend). Under `Off` every step
+/// is rapier's alone: none are the backend's.
+fn held_by_backend(
+    scene: &Scene,
+    backend: Backend,
+    options: &RunOptions,
+    counted: &[(usize, RigidBodyHandle)],
+) -> usize {
+    if backend == Backend::Off {
+        return 0;
+    }
+    held_by_stepper(
+        scene,
+        &|| make_stepper(backend, &options.backend),
+        options.lift,
+        counted,
+    )
+}
+
+/// [`held_by_backend`] for the steppers `make` builds (`None`: it cannot,
+/// and every counted body-step is taken as the stepper's).
+fn held_by_stepper(
+    scene: &Scene,
+    make: &dyn Fn() -> Option<Box<dyn Stepper>>,
+    lift: Real,
+    counted: &[(usize, RigidBodyHandle)],
+) -> usize {
+    let mut by_step: BTreeMap<usize, Vec<RigidBodyHandle>> = BTreeMap::new();
+    for &(step, body) in counted {
+        by_step.entry(step).or_default().push(body);
+    }
+    let mut theirs = 0;
+    for (&step, bodies) in &by_step {
+        let Some((before, after)) = make().map(|s| replay_plain(scene, s, lift, step)) else {
+            theirs += bodies.len();
+            continue;
+        };
+        theirs += bodies
+            .iter()
+            .filter(|b| match (before.bodies.get(b), after.bodies.get(b)) {
+                (Some(start), Some(end)) => !fidelity::is_held(start, end),
+                _ => true,
+            })
+            .count();
+    }
+    theirs
+}
+
+/// The scene run by `stepper` up to step `step`, which rapier then takes
+/// with its CCD off: the snapshots before and after that step.
+fn replay_plain(
+    scene: &Scene,
+    mut stepper: Box<dyn Stepper>,
+    lift: Real,
+    step: usize,
+) -> (Snapshot, Snapshot) {
+    let (mut world, setup) = scene.instantiate();
+    if lift != 0.0 {
+        lift_dynamic_bodies(&mut world, lift);
+    }
+    stepper.install(&mut world);
+    for k in 0..=step {
+        let end_time = (k + 1) as f32 * scene.dt;
+        for script in &setup.scripts {
+            script.apply(&mut world, end_time);
+        }
+        if k < step {
+            stepper.step(&mut world);
+        }
+    }
+    let before = Snapshot::take(&world);
+    let ccd = world.integration_parameters.max_ccd_substeps;
+    world.integration_parameters.max_ccd_substeps = 0;
+    world.step();
+    world.integration_parameters.max_ccd_substeps = ccd;
+    (before, Snapshot::take(&world))
 }
 
 /// Raises every dynamic body by `by` metres against gravity.
@@ -249,4 +335,84 @@ fn median_ms(times: &mut [Duration]) -> f64 {
     }
     times.sort_unstable();
     times[times.len() / 2].as_secs_f64() * 1e3
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{Effects, Setup};
+    use rapier3d::prelude::{ColliderBuilder, RigidBodyBuilder};
+
+    /// A ball sliding at 5 m/s along a floor, gravity off.
+    fn sliding(world: &mut PhysicsWorld) -> Setup {
+        world.insert_collider(ColliderBuilder::cuboid(50.0, 0.5, 50.0), None);
+        world.insert(
+            RigidBodyBuilder::dynamic()
+                .translation(Vector::new(0.0, 1.0, 0.0))
+                .linvel(Vector::new(5.0, 0.0, 0.0)),
+            ColliderBuilder::ball(0.5),
+        );
+        Setup::default()
+    }
+
+    const SLIDING: Scene = Scene {
+        name: "sliding",
+        about: "a ball sliding along a floor",
+        dt: 1.0 / 60.0,
+        steps: 30,
+        effects: Effects {
+            gravity: false,
+            rotation: false,
+            restitution: false,
+            friction: false,
+            kinematic: false,
+            settles: false,
+        },
+        built_to_tunnel: false,
+        view: [0, 1],
+        build: sliding,
+    };
+
+    /// Steps the world, then puts every dynamic body back where it started
+    /// the step, velocities kept: a backend that freezes bodies.
+    struct Pinning;
+
+    impl Stepper for Pinning {
+        fn install(&mut self, _: &mut PhysicsWorld) {}
+
+        fn step(&mut self, world: &mut PhysicsWorld) {
+            let start: Vec<_> = world
+                .bodies
+                .iter()
+                .map(|(h, rb)| (h, *rb.position()))
+                .collect();
+            world.step();
+            for (h, pose) in start {
+                if let Some(rb) = world.bodies.get_mut(h).filter(|rb| rb.is_dynamic()) {
+                    rb.set_position(pose, true);
+                }
+            }
+        }
+
+        fn ccd_time(&self) -> Option<Duration> {
+            None
+        }
+    }
+
+    /// A backend that pins a sliding ball holds it every step, and the
+    /// replays (rapier alone from each pinned state moves it) charge the
+    /// backend with every one of those steps.
+    #[test]
+    fn a_backend_that_pins_bodies_is_charged_with_every_held_step() {
+        let (mut world, _) = SLIDING.instantiate();
+        let mut frozen = FrozenCounter::default();
+        for step in 0..SLIDING.steps {
+            let before = Snapshot::take(&world);
+            Pinning.step(&mut world);
+            frozen.check_step(&before, &Snapshot::take(&world), step);
+        }
+        assert_eq!(frozen.count(), SLIDING.steps);
+        let theirs = held_by_stepper(&SLIDING, &|| Some(Box::new(Pinning)), 0.0, &frozen.counted);
+        assert_eq!(theirs, SLIDING.steps);
+    }
 }
