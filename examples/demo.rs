@@ -208,7 +208,8 @@ fn main() -> ExitCode {
     );
     println!(
         "frozen: body-steps held (< 1 mm, < 0.01 rad) while faster than 1 m/s or 1 rad/s, \
-in runs of 10+; defl: body-steps whose free path touched nothing but whose velocity \
+in runs of 10+, and not held when rapier alone (no CCD) takes that step from the same state; \
+defl: body-steps whose free path touched nothing but whose velocity \
 changed; rest mm: largest final height difference / distance from rapier's run, bodies \
 rapier lost left out (settling scenes only, - = does not settle; on rapier's row, ± = how far \
 its own run moves when every body starts 0.1 mm higher); energy %: largest one-step rise of \
