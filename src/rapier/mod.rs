@@ -75,6 +75,8 @@ pub struct AffineCcd {
     config: CcdConfig,
     report: CcdReport,
     starts: Vec<Start>,
+    /// Poses of the bodies asleep before the step.
+    asleep: select::Asleep,
     /// The first pass of `select::moved`.
     seen: Vec<select::Seen>,
     moved: Vec<Moved>,
@@ -339,7 +341,13 @@ impl AffineCcd {
         // Recording and selection are a pose copy and a comparison per body
         // and are not timed: the clock reads would cost more than they do
         // (a step with no fast body reads no clock).
-        select::record(bodies, &self.config, &mut self.report, &mut self.starts);
+        select::record(
+            bodies,
+            &self.config,
+            &mut self.report,
+            &mut self.starts,
+            &mut self.asleep,
+        );
 
         pipeline.step(
             gravity,
@@ -364,6 +372,7 @@ impl AffineCcd {
         }
         let dt = params.dt as f64;
         if dt > 0.0 {
+            select::add_woken(islands, &self.asleep, &mut self.starts);
             select::moved(
                 &self.starts,
                 bodies,

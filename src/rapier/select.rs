@@ -2,7 +2,11 @@
 //!
 //! Before the step we record the pose of every enabled, non-fixed body,
 //! asleep or not (targets that move need their start pose too, and a
-//! sleeping body may be woken and thrown during the step). After it we keep the
+//! sleeping body may be woken and thrown during the step): an awake one in
+//! the list of starts, a sleeping one only in a table by arena index, which
+//! is read after the step for the bodies rapier woke (those in its awake
+//! set that were not in the starts). A body that sleeps through the step
+//! is not looked at again. After the step we keep the
 //! dynamic ones whose fastest point went farther than `fast_factor` times
 //! their thinnest extent: rapier's post-solve test, with the rotation
 //! counted as an arc (whole turns included, through the velocity term)
@@ -14,34 +18,73 @@ use super::moved::{Moved, Start, angle_bound, angle_short, travel_bound};
 use super::report::{CcdReport, SkipReason};
 use super::turns::turn_hint;
 use rapier3d::parry::shape::{Shape, TypedShape};
-use rapier3d::prelude::{ColliderSet, Pose, RigidBody, RigidBodySet, Vector};
+use rapier3d::prelude::{
+    ColliderSet, IslandManager, Pose, RigidBody, RigidBodyHandle, RigidBodySet, Vector,
+};
 use std::f64::consts::PI;
 
 fn finite_vels(rb: &RigidBody) -> bool {
     rb.linvel().is_finite() && rb.angvel().is_finite()
 }
 
+/// The poses of the bodies asleep before the step, by arena index, each
+/// with the number of the step that wrote it (only this step's are read).
+#[derive(Default)]
+pub(crate) struct Asleep {
+    step: u32,
+    poses: Vec<(u32, Pose)>,
+}
+
+impl Asleep {
+    fn put(&mut self, handle: RigidBodyHandle, pose: Pose) {
+        let index = handle.into_raw_parts().0 as usize;
+        match self.poses.get_mut(index) {
+            Some(entry) => *entry = (self.step, pose),
+            None => self.grow(index, pose),
+        }
+    }
+
+    #[cold]
+    fn grow(&mut self, index: usize, pose: Pose) {
+        self.poses.resize(index + 1, (0, Pose::IDENTITY));
+        self.poses[index] = (self.step, pose);
+    }
+
+    /// The pose `handle`'s body had before this step, if it was asleep.
+    fn get(&self, handle: RigidBodyHandle) -> Option<Pose> {
+        let (step, pose) = *self.poses.get(handle.into_raw_parts().0 as usize)?;
+        (step == self.step).then_some(pose)
+    }
+}
+
 /// The poses of the bodies that may move during the next step, sleeping
 /// ones included: a body asleep at the start can be woken by a hit during
 /// the step and leave it fast (the long soak lost a resting compound
-/// through the floor that way). Awake dynamic bodies with a non-finite
-/// state are reported and left out; a sleeping one is recorded as it is and
-/// checked after the step if it moved (`moved`).
+/// through the floor that way). Awake ones go to `out`; sleeping ones to
+/// `asleep`, which [`add_woken`] reads after the step: most sleeping
+/// bodies are never woken, and a list entry each, checked after the step,
+/// cost as much as rapier's own step spends on them. Awake dynamic bodies
+/// with a non-finite state are reported and left out; a sleeping one is
+/// recorded as it is.
 pub(crate) fn record(
     bodies: &RigidBodySet,
     config: &CcdConfig,
     report: &mut CcdReport,
     out: &mut Vec<Start>,
+    asleep: &mut Asleep,
 ) {
     out.clear();
+    // Never 0, the step number of an entry not yet written.
+    asleep.step = asleep.step.checked_add(1).unwrap_or(1);
     for (handle, rb) in bodies.iter() {
         if rb.is_fixed() || !rb.is_enabled() {
             continue;
         }
-        // A sleeping body is checked after the step, if it moved at all
-        // (`moved`): most never do, and checking them costs as much as
-        // rapier's own step spends on them.
-        if !rb.is_sleeping() && (!rb.position().is_finite() || !finite_vels(rb)) {
+        if rb.is_sleeping() {
+            asleep.put(handle, *rb.position());
+            continue;
+        }
+        if !rb.position().is_finite() || !finite_vels(rb) {
             if rb.is_dynamic() && !config.opted_out(rb.user_data) {
                 report.skip(handle, SkipReason::NonFinite);
             }
@@ -51,6 +94,23 @@ pub(crate) fn record(
             handle,
             pose: *rb.position(),
         });
+    }
+}
+
+/// Adds to `starts` the bodies rapier woke during the step: those of its
+/// awake set that were asleep before it, at the pose `record` kept. A
+/// body rapier moves is in its awake set, and a body it wakes stays awake
+/// for a while (a wake-up resets its sleep timer), so no body that moved is
+/// left out. `starts` stays in arena order, the order `record` writes.
+pub(crate) fn add_woken(islands: &IslandManager, asleep: &Asleep, starts: &mut Vec<Start>) {
+    let recorded = starts.len();
+    for handle in islands.active_bodies() {
+        if let Some(pose) = asleep.get(handle) {
+            starts.push(Start { handle, pose });
+        }
+    }
+    if starts.len() > recorded {
+        starts.sort_unstable_by_key(|s| s.handle.into_raw_parts().0);
     }
 }
 
@@ -105,7 +165,9 @@ pub(crate) fn body_thickness(rb: &RigidBody, colliders: &ColliderSet) -> f64 {
 /// the velocity term) instead of rapier's chord.
 ///
 /// Most bodies that move are slow, so a cheap bound is tried first: the
-/// short angle is at most `π·|sin(angle/2)|` (no atan2) and rapier's
+/// short angle is at most `π·|sin(angle/2)|` (no atan2), the centre of
+/// mass moves at most the origin's shift plus its chord (no pose
+/// transforms), and rapier's
 /// `max_extent` bounds every collider's distance from the centre of mass
 /// (no walk over the colliders for it; rapier's step has just brought it
 /// up to date with any collider the user changed). Only a body that bound
@@ -121,19 +183,25 @@ fn tunnels(
     fast_factor: f64,
 ) -> (bool, Option<f64>) {
     let com = rb.local_center_of_mass();
-    let shift = (*end * com - *start * com).length() as f64;
     let (linvel, angvel) = (rb.linvel().length() as f64, rb.angvel().length() as f64);
     let spin = angvel * dt;
     let horizon = horizon.max(dt);
     let allowed = fast_factor * body_thickness(rb, colliders);
     // Cheap upper bound of the exact measure below, padded for rounding.
+    // `sine` is |sin(angle/2)|: the centre of mass moves by the origin's
+    // shift plus at most its chord, `2·sine·|com|` (no pose transforms).
     let dq = end.rotation * start.rotation.inverse();
-    let short_bound = PI * dq.xyz().length() as f64;
+    let sine = dq.xyz().length() as f64;
+    let offset = com.length() as f64;
+    let origin_shift = (end.translation - start.translation).length() as f64;
+    let shift_bound = origin_shift + 2.0 * sine * offset + 1.0e-5 * offset;
     let reach = rb.mass_properties().max_extent() as f64;
-    let bound = (shift + reach * short_bound.max(spin)).max((linvel + angvel * reach) * horizon);
+    let bound =
+        (shift_bound + reach * (PI * sine).max(spin)).max((linvel + angvel * reach) * horizon);
     if bound * (1.0 + 1.0e-6) <= allowed {
         return (false, None);
     }
+    let shift = (*end * com - *start * com).length() as f64;
     let extent = turning_extent(rb, colliders);
     let short = angle_short(start, end);
     // Arc length of the farthest point; the velocity term is rapier's.
@@ -262,6 +330,28 @@ mod tests {
         let arc = shift + extent * angle_short(start, end).max(spin);
         let by_velocity = (rb.linvel().length() as f64 + rb.angvel().length() as f64 * extent) * dt;
         arc.max(by_velocity)
+    }
+
+    /// `add_woken` reads only the poses the last `record` wrote: a body
+    /// asleep in an earlier step and awake since is not taken for woken.
+    #[test]
+    fn asleep_poses_are_read_only_in_the_step_that_wrote_them() {
+        let mut bodies = RigidBodySet::new();
+        let sleeper = bodies.insert(
+            RigidBodyBuilder::dynamic()
+                .translation(Vector::new(1.0, 2.0, 3.0))
+                .sleeping(true),
+        );
+        let (config, mut report) = (CcdConfig::default(), CcdReport::default());
+        let (mut starts, mut asleep) = (Vec::new(), Asleep::default());
+        record(&bodies, &config, &mut report, &mut starts, &mut asleep);
+        assert!(starts.is_empty(), "a sleeping body is not in the starts");
+        let pose = asleep.get(sleeper).expect("kept in the table");
+        assert_eq!(pose.translation, Vector::new(1.0, 2.0, 3.0));
+        bodies[sleeper].wake_up(true);
+        record(&bodies, &config, &mut report, &mut starts, &mut asleep);
+        assert_eq!(starts.len(), 1, "an awake body is in the starts");
+        assert!(asleep.get(sleeper).is_none(), "last step's entry is stale");
     }
 
     proptest! {
