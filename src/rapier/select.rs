@@ -101,7 +101,10 @@ pub(crate) fn record(
 /// awake set that were asleep before it, at the pose `record` kept. A
 /// body rapier moves is in its awake set, and a body it wakes stays awake
 /// for a while (a wake-up resets its sleep timer), so no body that moved is
-/// left out. `starts` stays in arena order, the order `record` writes.
+/// left out. (With a sleep timer set to zero a woken body could fall
+/// asleep again at the end of the step; rapier then found it slow and
+/// hardly displaced, and it is left out as a target that did not move.)
+/// `starts` stays in arena order, the order `record` writes.
 pub(crate) fn add_woken(islands: &IslandManager, asleep: &Asleep, starts: &mut Vec<Start>) {
     let recorded = starts.len();
     for handle in islands.active_bodies() {
