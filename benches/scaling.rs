@@ -91,23 +91,22 @@ fn sleeping_bodies(n: usize) -> (f64, f64, usize) {
                 world.insert_body(RigidBodyBuilder::dynamic().translation(Vector::new(x, 0.6, z)));
             world.insert_collider(ColliderBuilder::cuboid(0.5, 0.5, 0.5), Some(body));
         }
-        // Settle: the boxes land and fall asleep (rapier's default sleep
-        // timer is 2 s).
-        for _ in 0..400 {
+        let mut step = |world: &mut PhysicsWorld| {
             if affine {
-                ccd.step(&mut world);
+                ccd.step(world);
             } else {
                 world.step();
             }
+        };
+        // Settle: the boxes land and fall asleep (rapier's default sleep
+        // timer is 2 s).
+        for _ in 0..400 {
+            step(&mut world);
         }
         let mut step_times = Vec::new();
         for _ in 0..22 {
             let start = Instant::now();
-            if affine {
-                ccd.step(&mut world);
-            } else {
-                world.step();
-            }
+            step(&mut world);
             step_times.push(start.elapsed().as_secs_f64());
         }
         step_times.remove(0);
