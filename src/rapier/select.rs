@@ -36,18 +36,19 @@ pub(crate) struct Asleep {
 }
 
 impl Asleep {
-    fn put(&mut self, handle: RigidBodyHandle, pose: Pose) {
+    fn put(&mut self, handle: RigidBodyHandle, pose: &Pose) {
         let index = handle.into_raw_parts().0 as usize;
-        match self.poses.get_mut(index) {
-            Some(entry) => *entry = (self.step, pose),
-            None => self.grow(index, pose),
+        if index >= self.poses.len() {
+            self.grow(index);
         }
+        let entry = &mut self.poses[index];
+        entry.0 = self.step;
+        entry.1 = *pose;
     }
 
     #[cold]
-    fn grow(&mut self, index: usize, pose: Pose) {
+    fn grow(&mut self, index: usize) {
         self.poses.resize(index + 1, (0, Pose::IDENTITY));
-        self.poses[index] = (self.step, pose);
     }
 
     /// The pose `handle`'s body had before this step, if it was asleep.
@@ -78,11 +79,14 @@ pub(crate) fn record(
     // Never 0, the step number of an entry not yet written.
     asleep.step = asleep.step.checked_add(1).unwrap_or(1);
     for (handle, rb) in bodies.iter() {
-        if rb.is_fixed() || !rb.is_enabled() {
+        // Tested first, as most bodies of a large world sleep. A fixed or
+        // disabled one in the table is harmless: never in rapier's awake
+        // set, it is never read.
+        if rb.is_sleeping() {
+            asleep.put(handle, rb.position());
             continue;
         }
-        if rb.is_sleeping() {
-            asleep.put(handle, *rb.position());
+        if rb.is_fixed() || !rb.is_enabled() {
             continue;
         }
         if !rb.position().is_finite() || !finite_vels(rb) {
