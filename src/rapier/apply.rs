@@ -23,7 +23,7 @@ const HELD: f64 = 1.0e-3;
 /// Clamps the hit bodies, then reports the sensors crossed before each
 /// body's stop.
 pub(crate) fn apply(
-    plan: Plan,
+    plan: &Plan,
     bodies: &mut RigidBodySet,
     colliders: &mut ColliderSet,
     dt: f64,

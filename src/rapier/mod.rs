@@ -395,17 +395,28 @@ impl AffineCcd {
                     config: &self.config,
                     slop: params.allowed_linear_error() as f64,
                 };
+                // The moved list goes through the rounds and comes back
+                // (cut), so its buffer is reused rather than copied.
                 let plan = rounds::sweep_rounds(
                     &scene,
                     broad_phase,
                     narrow_phase,
-                    &self.moved,
+                    std::mem::take(&mut self.moved),
                     dt,
                     &opts,
                     &mut self.workspace,
                     &mut self.report,
                 );
-                apply::apply(plan, bodies, colliders, dt, &opts, events, &mut self.report);
+                apply::apply(
+                    &plan,
+                    bodies,
+                    colliders,
+                    dt,
+                    &opts,
+                    events,
+                    &mut self.report,
+                );
+                self.moved = plan.moved;
                 self.report.elapsed = clock.elapsed();
             }
         }

@@ -66,7 +66,7 @@ pub(crate) fn sweep_rounds(
     scene: &StageWorld,
     broad_phase: &BroadPhaseBvh,
     narrow_phase: &NarrowPhase,
-    moved: &[Moved],
+    moved: Vec<Moved>,
     dt: f64,
     opts: &QueryOptions,
     ws: &mut Workspace,
@@ -104,6 +104,14 @@ pub(crate) fn sweep_rounds(
     rounds.into_plan()
 }
 
+/// A hit body's motion as a round cuts it: carried by the pusher at index
+/// `p` (with the velocity the push gives it), or truncated at its impact
+/// (`true` when the cut motion leaves the old path).
+enum Cut {
+    Carried(Moved, usize, Vector),
+    Truncated(Moved, bool),
+}
+
 /// The state carried from one round to the next.
 struct Rounds {
     /// The moved bodies, each with its motion as cut so far.
@@ -124,10 +132,9 @@ struct Rounds {
 }
 
 impl Rounds {
-    fn new(moved: &[Moved]) -> Rounds {
+    fn new(moved: Vec<Moved>) -> Rounds {
         let n = moved.len();
         Rounds {
-            current: moved.to_vec(),
             scale: vec![1.0; n],
             velocity: vec![None; n],
             last: vec![None; n],
@@ -137,6 +144,7 @@ impl Rounds {
                 .filter(|m| m.pusher)
                 .map(|m| m.handle)
                 .collect(),
+            current: moved,
             carried: HashSet::new(),
             changed: Vec::new(),
             changed_set: HashSet::new(),
@@ -244,40 +252,48 @@ impl Rounds {
         self.changed.clear();
         self.changed_set.clear();
         self.rerouted.clear();
-        let before = self.current.clone();
-        for (i, hit) in found {
-            let by = scene.colliders[hit.collider2]
-                .parent()
-                .filter(|h| self.pushing.contains(h))
-                .and_then(|h| before.iter().position(|m| m.handle == h));
-            let f = hit.toi.fraction;
+        // Every cut from the motions as they were before this round (a
+        // pusher's own motion may be cut in it too), then all of them
+        // applied, in the same order.
+        let cuts: Vec<_> = found
+            .into_iter()
+            .map(|(i, hit)| {
+                let by = scene.colliders[hit.collider2]
+                    .parent()
+                    .filter(|h| self.pushing.contains(h))
+                    .and_then(|h| self.current.iter().position(|m| m.handle == h));
+                let f = hit.toi.fraction;
+                let cut = match by {
+                    Some(p) => {
+                        clamp::carry(scene.bodies, &self.current[i], &self.current[p], f, dt)
+                            .map(|(cut, v)| Cut::Carried(cut, p, v))
+                    }
+                    None => clamp::truncate(scene.bodies, &self.current[i], f, dt)
+                        .map(|(cut, new_path)| Cut::Truncated(cut, new_path)),
+                };
+                (i, hit, cut)
+            })
+            .collect();
+        for (i, hit, cut) in cuts {
             let handle = self.current[i].handle;
-            match by {
-                Some(p) => match clamp::carry(scene.bodies, &before[i], &before[p], f, dt) {
-                    Ok((cut, v)) => {
-                        self.current[i] = cut;
-                        self.velocity[i] = Some(self.velocity[p].unwrap_or(v));
-                        self.carried.insert(handle);
+            match cut {
+                Ok(Cut::Carried(cut, p, v)) => {
+                    self.current[i] = cut;
+                    self.velocity[i] = Some(self.velocity[p].unwrap_or(v));
+                    self.carried.insert(handle);
+                    self.rerouted.insert(handle);
+                }
+                Ok(Cut::Truncated(cut, new_path)) => {
+                    if new_path {
                         self.rerouted.insert(handle);
                     }
-                    Err(e) => {
-                        report.skip(handle, SkipReason::Query(e.to_string()));
-                        continue;
-                    }
-                },
-                None => match clamp::truncate(scene.bodies, &before[i], f, dt) {
-                    Ok((cut, new_path)) => {
-                        if new_path {
-                            self.rerouted.insert(handle);
-                        }
-                        self.current[i] = cut;
-                        self.scale[i] *= f;
-                    }
-                    Err(e) => {
-                        report.skip(handle, SkipReason::Query(e.to_string()));
-                        continue;
-                    }
-                },
+                    self.current[i] = cut;
+                    self.scale[i] *= hit.toi.fraction;
+                }
+                Err(e) => {
+                    report.skip(handle, SkipReason::Query(e.to_string()));
+                    continue;
+                }
             }
             self.held[i] |= hit.touching;
             self.last[i] = Some(hit);
