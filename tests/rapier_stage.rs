@@ -580,3 +580,46 @@ fn a_sleeping_body_thrown_by_a_hit_stays_above_the_floor() {
         "affine-ccd: the woken ball went through the floor (y = {ours} m)"
     );
 }
+
+/// A ball asleep left of a wall is moved by the user to the right of it
+/// without being woken (`set_position(.., false)`), then a box bumps it
+/// awake. The stage must sweep it from where it is when the step begins:
+/// from the pose it had when it fell asleep, its motion would cross the
+/// wall and be clamped there, on the wrong side.
+#[test]
+fn a_sleeping_body_moved_without_waking_starts_where_it_was_moved() {
+    let mut run = Run::new(Ccd::Affine, Vector::ZERO);
+    run.fixed(ColliderBuilder::cuboid(0.05, 2.0, 2.0), Vector::ZERO);
+    let ball = run
+        .world
+        .insert(
+            RigidBodyBuilder::dynamic()
+                .translation(Vector::new(-2.0, 0.0, 0.0))
+                .sleeping(true),
+            ColliderBuilder::ball(0.1),
+        )
+        .0;
+    for _ in 0..3 {
+        run.step();
+    }
+    assert!(run.world.bodies[ball].is_sleeping(), "the ball sleeps");
+    let moved = Pose::from_translation(Vector::new(2.0, 0.0, 0.0));
+    run.world.bodies[ball].set_position(moved, false);
+    run.dynamic(
+        RigidBodyBuilder::dynamic()
+            .translation(Vector::new(2.32, 0.0, 0.0))
+            .linvel(Vector::new(-3.0, 0.0, 0.0)),
+        ColliderBuilder::cuboid(0.2, 0.2, 0.2),
+    );
+    let mut woken = false;
+    for _ in 0..10 {
+        run.step();
+        woken |= !run.world.bodies[ball].is_sleeping();
+        let x = run.x(ball);
+        assert!(
+            x > 1.5,
+            "the ball was pulled back towards its old pose: x = {x}"
+        );
+    }
+    assert!(woken, "the box woke the ball");
+}
