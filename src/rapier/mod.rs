@@ -338,9 +338,10 @@ impl AffineCcd {
         hooks: &dyn PhysicsHooks,
         events: &dyn EventHandler,
     ) {
-        // Recording and selection are a pose copy and a comparison per body
-        // and are not timed: the clock reads would cost more than they do
-        // (a step with no fast body reads no clock).
+        // Recording and selection are a pose copy per body (and, after the
+        // step, a comparison per awake one) and are not timed: the clock
+        // reads would cost more than they do (a step with no fast body
+        // reads no clock).
         select::record(
             bodies,
             &self.config,
