@@ -231,13 +231,22 @@ pub(crate) fn contact(
             *best = (sep, if ahead >= behind { n } else { -n }, kind);
         }
     };
+    // A face that separates by more than the prediction settles it at
+    // once (the largest separation can only be larger): most of a mesh's
+    // triangles near a box, in a contact query, end here.
     let (faces1, count1) = s1.faces();
     for n in &faces1[..count1] {
         consider(&mut best, *n, Axis::FaceOfFirst);
+        if best.0 > prediction {
+            return SatAnswer::Beyond;
+        }
     }
     let (faces2, count2) = s2.faces();
     for n in &faces2[..count2] {
         consider(&mut best, *n, Axis::FaceOfSecond);
+        if best.0 > prediction {
+            return SatAnswer::Beyond;
+        }
     }
     // A face that separates settles it (the edges could only separate
     // more): apart, or beyond the prediction, and in either case parry
