@@ -458,6 +458,20 @@ impl Motion {
         padded(self.displacement.norm() + self.bend.norm() + self.turning_chord(radius))
     }
 
+    /// An upper bound on how far any point within `radius` metres of the
+    /// frame's origin strays, over the times `span`, from where it is at
+    /// the middle `m` of `span` (half-width `h`): the centre's drift
+    /// `|τ − m|·|v + w·(τ + m)| ≤ h·(|v| + |w|·(2|m| + h))` (as in
+    /// [`Motion::centres_offset`]) plus the chord of a turn through at most
+    /// `|θ|·h`. On part of a step it is much less than
+    /// [`Motion::travel_bound`].
+    pub(crate) fn travel_within(&self, span: TimeSpan, radius: f64) -> f64 {
+        let (m, h) = span.center_radius();
+        let drift = h * (self.displacement.norm() + self.bend.norm() * (2.0 * m.abs() + h));
+        let chord = (self.arm.norm() + radius) * (self.rotation.norm() * h).min(2.0);
+        padded(drift + chord)
+    }
+
     /// How far a point at `local` in this frame (and everything within
     /// `radius` of it) stays from the rotation centre, at every time, metres:
     /// turning does not change it.

@@ -9,6 +9,7 @@
 use super::moved::Moved;
 use super::world::{StageWorld, StepMotions};
 use crate::convert::pose_from_iso;
+use crate::enclosure::TimeSpan;
 use crate::motion::{Motion, Trajectory};
 use rapier3d::parry::bounding_volume::{Aabb, BoundingVolume};
 use rapier3d::parry::query::QueryDispatcher;
@@ -39,6 +40,26 @@ pub(crate) fn swept_aabb(shape: &dyn Shape, motion: &Motion) -> Aabb {
     let a = shape.compute_aabb(&start).loosened(margin);
     let b = end_box.loosened(margin);
     a.intersection(&b).unwrap_or_else(|| a.merged(&b))
+}
+
+/// A box holding `shape` over the times `span` of `motion` (fractions of
+/// the step): its box at the middle of `span`, loosened by how far its
+/// points stray from there ([`Motion::travel_within`]). On the part of a
+/// step after a contact it is far smaller than [`swept_aabb`]'s.
+pub(crate) fn swept_aabb_within(shape: &dyn Shape, motion: &Motion, span: TimeSpan) -> Aabb {
+    let (middle, _) = span.center_radius();
+    let at_middle = shape.compute_aabb(&pose_from_iso(&motion.pose_at(middle)));
+    let sphere = shape.compute_local_bounding_sphere();
+    let radius = sphere.center.length() as f64 + sphere.radius as f64;
+    let travel = motion.travel_within(span, radius);
+    // f32 boxes: the travel rounded up, plus the rounding of the pose and
+    // of the box, a few parts in 10⁷ of its coordinates.
+    let coordinates = at_middle.mins.abs().max(at_middle.maxs.abs()).max_element() as f64;
+    let margin = (((travel + 1.0e-6 * coordinates) * (1.0 + 1.0e-5)) as f32).next_up() + 1.0e-5;
+    if !margin.is_finite() {
+        return Aabb::new(Vector::splat(f32::MIN), Vector::splat(f32::MAX));
+    }
+    at_middle.loosened(margin)
 }
 
 /// How a pair interacts.
@@ -247,7 +268,8 @@ pub(crate) struct MeshPiece {
 }
 
 /// The triangles of a fixed triangle mesh or heightfield that `moving` may
-/// meet (those whose boxes meet its swept box, in the mesh's frame), for
+/// meet (those whose boxes meet the world box `swept` gives, holding it
+/// over the times that matter, grown by the reach that counts), for
 /// sweeping each on its own as rapier's CCD does: it stops a body at each
 /// triangle of a mesh apart, and leaves to the contacts only the
 /// triangles touching at the start, not the whole mesh. `false` (and
@@ -256,9 +278,9 @@ pub(crate) struct MeshPiece {
 pub(crate) fn mesh_triangles(
     moving: &dyn Shape,
     moving_motion: &Motion,
+    swept: impl FnOnce() -> Aabb,
     target: &dyn Shape,
     target_motion: &Motion,
-    margin: f64,
     slop: f64,
     out: &mut Vec<MeshPiece>,
 ) -> bool {
@@ -266,9 +288,12 @@ pub(crate) fn mesh_triangles(
         return false;
     }
     let pose = pose_from_iso(&target_motion.pose_at(0.0));
-    let local = swept_aabb(moving, moving_motion)
-        .loosened(margin as f32)
-        .transform_by(&pose.inverse());
+    let local = match target.as_typed_shape() {
+        TypedShape::TriMesh(_) | TypedShape::HeightField(_) => {
+            swept().transform_by(&pose.inverse())
+        }
+        _ => return false,
+    };
     let start = out.len();
     match target.as_typed_shape() {
         TypedShape::TriMesh(mesh) => {
@@ -332,7 +357,8 @@ mod tests {
         /// A collider off its body's centre of mass, on a body that moves,
         /// turns (whole turns too) and accelerates, near the origin or far
         /// from it: at every sampled time of the motion the stage builds,
-        /// its box lies in the rough box and in the tight one.
+        /// its box lies in the rough box and in the tight one, and at every
+        /// sampled time of a part of the step in that part's box.
         #[test]
         fn the_rough_and_tight_boxes_hold_the_collider(
             start in (prop::array::uniform3(-5.0f32..5.0), prop::array::uniform3(-1.0f32..1.0), -3.0f32..3.0),
@@ -343,6 +369,7 @@ mod tests {
             local in (prop::array::uniform3(-1.0f32..1.0), prop::array::uniform3(-1.0f32..1.0), -3.0f32..3.0),
             half in prop::array::uniform3(0.01f32..1.0),
             far in prop::sample::select(vec![0.0f32, 1.0e3, 2.0e4, 3.0e5]),
+            part in (0.0f64..1.0, 0.0f64..1.0),
         ) {
             let dt = 1.0 / 60.0;
             let (mut bodies, mut colliders) = (RigidBodySet::new(), ColliderSet::new());
@@ -385,6 +412,14 @@ mod tests {
                 let b = co.shape().compute_aabb(&at);
                 prop_assert!(within(&b, &rough), "τ = {}/64: {:?} not in rough {:?}", k, b, rough);
                 prop_assert!(within(&b, &tight), "τ = {}/64: {:?} not in tight {:?}", k, b, tight);
+            }
+            // And over a part of the step, the box around its middle.
+            let span = TimeSpan::new(part.0.min(part.1), part.0.max(part.1));
+            let partial = swept_aabb_within(co.shape(), &motion, span);
+            for k in 0..=64 {
+                let tau = span.lo + span.width() * k as f64 / 64.0;
+                let b = co.shape().compute_aabb(&pose_from_iso(&motion.pose_at(tau)));
+                prop_assert!(within(&b, &partial), "τ = {}: {:?} not in {:?}", tau, b, partial);
             }
         }
     }

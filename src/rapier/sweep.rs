@@ -6,6 +6,7 @@ use super::backoff::{
 };
 use super::candidates::{
     Candidate, Interaction, MeshPiece, gather, interaction, meets, mesh_triangles, rough_swept_box,
+    swept_aabb,
 };
 use super::moved::Moved;
 use super::report::CcdReport;
@@ -149,9 +150,9 @@ fn earliest(
             && mesh_triangles(
                 moving.shape,
                 &moving.motion,
+                || swept_aabb(moving.shape, &moving.motion).loosened(margin as f32),
                 t.shape,
                 &t.motion,
-                margin,
                 rules.slop,
                 &mut triangles,
             )
