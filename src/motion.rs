@@ -24,7 +24,7 @@ use crate::enclosure::rounding::{bound, up};
 use crate::enclosure::{Enclosure, Interval, TimeSpan};
 use crate::error::{CcdError, check_finite};
 use nalgebra::{Isometry3, Matrix3, Point3, Translation3, UnitQuaternion, Vector3};
-use std::f64::consts::TAU;
+use std::f64::consts::{FRAC_PI_2, TAU};
 
 /// A rigid pose with enclosed entries: `x ↦ rotation·x + translation`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -459,17 +459,25 @@ impl Motion {
     }
 
     /// An upper bound on how far any point within `radius` metres of the
-    /// frame's origin strays, over the times `span`, from where it is at
-    /// the middle `m` of `span` (half-width `h`): the centre's drift
-    /// `|τ − m|·|v + w·(τ + m)| ≤ h·(|v| + |w|·(2|m| + h))` (as in
-    /// [`Motion::centres_offset`]) plus the chord of a turn through at most
-    /// `|θ|·h`. On part of a step it is much less than
-    /// [`Motion::travel_bound`].
-    pub(crate) fn travel_within(&self, span: TimeSpan, radius: f64) -> f64 {
-        let (m, h) = span.center_radius();
-        let drift = h * (self.displacement.norm() + self.bend.norm() * (2.0 * m.abs() + h));
-        let chord = (self.arm.norm() + radius) * (self.rotation.norm() * h).min(2.0);
-        padded(drift + chord)
+    /// frame's origin strays, over the times `span`, from the segment
+    /// between its positions at the two ends of `span` (half-width `h`):
+    /// the centre's `c(τ) = c₀ + v·τ + w·τ²` leaves its chord by
+    /// `|w|·(τ − lo)·(hi − τ) ≤ |w|·h²`, and a point `ρ` from the centre,
+    /// turning through `φ = 2·|θ|·h`, leaves its chord by the sagitta
+    /// `ρ·(1 − cos(φ/2))` (at most `2ρ` once `φ/2` passes a right angle).
+    /// A body flying straight strays not at all.
+    pub(crate) fn stray_within(&self, span: TimeSpan, radius: f64) -> f64 {
+        let (_, h) = span.center_radius();
+        let bend = self.bend.norm() * h * h;
+        let reach = self.arm.norm() + radius;
+        let half_turn = self.rotation.norm() * h;
+        // `1 − cos x = 2·sin²(x/2)`, without the cancellation.
+        let sagitta = if half_turn < FRAC_PI_2 {
+            2.0 * reach * (0.5 * half_turn).sin().powi(2)
+        } else {
+            2.0 * reach
+        };
+        padded(bend + sagitta) + 1.0e-12 * reach
     }
 
     /// How far a point at `local` in this frame (and everything within

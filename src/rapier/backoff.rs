@@ -506,11 +506,9 @@ fn resolve_margin(moving: &ShapeMotion, target: &ShapeMotion) -> f64 {
 }
 
 /// Most triangles of a mesh [`stop_when_deep`] searches one by one; past
-/// it the search takes the whole mesh, whose tree prunes the far ones.
-/// Measured (callgrind, whole scene runs): with at most 4, rain -5.7 %,
-/// far_from_origin -3.5 %, rain_dt10 -1.2 %; with at most 8 a capsule
-/// sliding over 8-12 triangles (slide_dt025) cost 2 % more than with the
-/// whole mesh.
+/// it the search takes the whole mesh, whose tree prunes the far ones. A
+/// ball landing meets one to four; a capsule sliding across 8-12 of them
+/// (slide_dt025) cost 2 % more searched one by one than through the tree.
 const MOST_DEEP_PIECES: usize = 4;
 
 /// A rounded pair's stop: the first time after its true contact `contact`

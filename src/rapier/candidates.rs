@@ -43,23 +43,24 @@ pub(crate) fn swept_aabb(shape: &dyn Shape, motion: &Motion) -> Aabb {
 }
 
 /// A box holding `shape` over the times `span` of `motion` (fractions of
-/// the step): its box at the middle of `span`, loosened by how far its
-/// points stray from there ([`Motion::travel_within`]). On the part of a
-/// step after a contact it is far smaller than [`swept_aabb`]'s.
+/// the step): its boxes at the two ends of `span` merged, loosened by how
+/// far its points stray from the segments between their end positions
+/// ([`Motion::stray_within`]): for a body flying straight, the box of its
+/// path, where [`swept_aabb`] grows every side by the whole travel.
 pub(crate) fn swept_aabb_within(shape: &dyn Shape, motion: &Motion, span: TimeSpan) -> Aabb {
-    let (middle, _) = span.center_radius();
-    let at_middle = shape.compute_aabb(&pose_from_iso(&motion.pose_at(middle)));
+    let at = |tau: f64| shape.compute_aabb(&pose_from_iso(&motion.pose_at(tau)));
+    let ends = at(span.lo).merged(&at(span.hi));
     let sphere = shape.compute_local_bounding_sphere();
     let radius = sphere.center.length() as f64 + sphere.radius as f64;
-    let travel = motion.travel_within(span, radius);
-    // f32 boxes: the travel rounded up, plus the rounding of the pose and
-    // of the box, a few parts in 10⁷ of its coordinates.
-    let coordinates = at_middle.mins.abs().max(at_middle.maxs.abs()).max_element() as f64;
-    let margin = (((travel + 1.0e-6 * coordinates) * (1.0 + 1.0e-5)) as f32).next_up() + 1.0e-5;
+    let stray = motion.stray_within(span, radius);
+    // f32 boxes: the stray rounded up, plus the rounding of the poses and
+    // of the boxes, a few parts in 10⁷ of their coordinates.
+    let coordinates = ends.mins.abs().max(ends.maxs.abs()).max_element() as f64;
+    let margin = (((stray + 1.0e-6 * coordinates) * (1.0 + 1.0e-5)) as f32).next_up() + 1.0e-5;
     if !margin.is_finite() {
         return Aabb::new(Vector::splat(f32::MIN), Vector::splat(f32::MAX));
     }
-    at_middle.loosened(margin)
+    ends.loosened(margin)
 }
 
 /// How a pair interacts.
@@ -351,6 +352,33 @@ mod tests {
 
     fn within(inner: &Aabb, outer: &Aabb) -> bool {
         inner.mins.cmpge(outer.mins).all() && inner.maxs.cmple(outer.maxs).all()
+    }
+
+    /// A ball thrown up and falling back over a part of the step: its path
+    /// rises above both its ends (the top at 0.75 of the step, 12 cm above
+    /// the higher end), which the part's box takes in.
+    #[test]
+    fn the_part_box_holds_a_falling_ball() {
+        use nalgebra::{Isometry3, Point3, Vector3};
+        let ball = rapier3d::parry::shape::Ball::new(0.05);
+        let start = Isometry3::translation(1.0, 2.0, 3.0);
+        let motion = Motion::from_velocities(
+            start,
+            Point3::new(1.0, 2.0, 3.0),
+            Vector3::new(30.0, 30.0, 0.0),
+            Vector3::zeros(),
+            1.0 / 10.0,
+        )
+        .unwrap()
+        .with_acceleration(Vector3::new(0.0, -400.0, 0.0))
+        .unwrap();
+        let span = TimeSpan::new(0.3, 1.0);
+        let partial = swept_aabb_within(&ball, &motion, span);
+        for k in 0..=64 {
+            let tau = span.lo + span.width() * k as f64 / 64.0;
+            let b = ball.compute_aabb(&pose_from_iso(&motion.pose_at(tau)));
+            assert!(within(&b, &partial), "τ = {tau}: {b:?} not in {partial:?}");
+        }
     }
 
     proptest! {
