@@ -19,8 +19,10 @@ use rapier3d::prelude::{
     QueryFilter, RigidBodySet, RigidBodyType, SolverFlags, Vector,
 };
 
-/// A box holding `shape` over the whole `motion`:
-/// every point stays within the travel bound of both its start and its end.
+/// A box holding `shape` over the whole `motion`: every point stays
+/// within the travel bound of both its start and its end, and close to the
+/// segment between them ([`path_box`]; a body flying straight sweeps the
+/// box of its path, not one grown by its travel on every side).
 pub(crate) fn swept_aabb(shape: &dyn Shape, motion: &Motion) -> Aabb {
     // The motion's own end: a motion cut by a clamp (possibly to a
     // standstill) ends before the collider's pose.
@@ -28,39 +30,54 @@ pub(crate) fn swept_aabb(shape: &dyn Shape, motion: &Motion) -> Aabb {
     if motion.is_fixed() {
         return end_box;
     }
-    let start = pose_from_iso(&motion.pose_at(0.0));
-    let sphere = shape.compute_local_bounding_sphere();
-    let radius = sphere.center.length() as f64 + sphere.radius as f64;
+    let start_box = shape.compute_aabb(&pose_from_iso(&motion.pose_at(0.0)));
+    let radius = bounding_radius(shape);
     let travel = motion.travel_bound(radius);
     // f32 boxes: round the margin up, plus rounding of the poses themselves.
     let margin = ((travel * (1.0 + 1.0e-5)) as f32).next_up() + 1.0e-5;
     if !margin.is_finite() {
-        return Aabb::new(Vector::splat(f32::MIN), Vector::splat(f32::MAX));
+        return everywhere();
     }
-    let a = shape.compute_aabb(&start).loosened(margin);
+    let a = start_box.loosened(margin);
     let b = end_box.loosened(margin);
-    a.intersection(&b).unwrap_or_else(|| a.merged(&b))
+    let by_travel = a.intersection(&b).unwrap_or_else(|| a.merged(&b));
+    let stray = motion.stray_within(TimeSpan::new(0.0, 1.0), radius);
+    let path = path_box(start_box.merged(&end_box), stray);
+    // Both hold the shape at the start: they meet.
+    by_travel.intersection(&path).unwrap_or(path)
 }
 
 /// A box holding `shape` over the times `span` of `motion` (fractions of
-/// the step): its boxes at the two ends of `span` merged, loosened by how
-/// far its points stray from the segments between their end positions
-/// ([`Motion::stray_within`]): for a body flying straight, the box of its
-/// path, where [`swept_aabb`] grows every side by the whole travel.
+/// the step): [`path_box`] of its boxes at the two ends of `span`.
 pub(crate) fn swept_aabb_within(shape: &dyn Shape, motion: &Motion, span: TimeSpan) -> Aabb {
     let at = |tau: f64| shape.compute_aabb(&pose_from_iso(&motion.pose_at(tau)));
     let ends = at(span.lo).merged(&at(span.hi));
-    let sphere = shape.compute_local_bounding_sphere();
-    let radius = sphere.center.length() as f64 + sphere.radius as f64;
-    let stray = motion.stray_within(span, radius);
+    path_box(ends, motion.stray_within(span, bounding_radius(shape)))
+}
+
+/// The shape's boxes at the two ends of a span, merged (`ends`), grown by
+/// `stray`, how far its points leave the segments between their end
+/// positions ([`Motion::stray_within`]): a box holding it over the span.
+fn path_box(ends: Aabb, stray: f64) -> Aabb {
     // f32 boxes: the stray rounded up, plus the rounding of the poses and
     // of the boxes, a few parts in 10⁷ of their coordinates.
     let coordinates = ends.mins.abs().max(ends.maxs.abs()).max_element() as f64;
     let margin = (((stray + 1.0e-6 * coordinates) * (1.0 + 1.0e-5)) as f32).next_up() + 1.0e-5;
     if !margin.is_finite() {
-        return Aabb::new(Vector::splat(f32::MIN), Vector::splat(f32::MAX));
+        return everywhere();
     }
     ends.loosened(margin)
+}
+
+/// How far the shape reaches from its frame's origin, metres.
+fn bounding_radius(shape: &dyn Shape) -> f64 {
+    let sphere = shape.compute_local_bounding_sphere();
+    sphere.center.length() as f64 + sphere.radius as f64
+}
+
+/// The box of all space (a motion or pose beyond `f32`).
+fn everywhere() -> Aabb {
+    Aabb::new(Vector::splat(f32::MIN), Vector::splat(f32::MAX))
 }
 
 /// How a pair interacts.
