@@ -305,13 +305,15 @@ pub(crate) fn mesh_triangles(
     if !target_motion.is_fixed() {
         return false;
     }
+    // The box is asked for only when the target has triangles.
+    if !matches!(
+        target.as_typed_shape(),
+        TypedShape::TriMesh(_) | TypedShape::HeightField(_)
+    ) {
+        return false;
+    }
     let pose = pose_from_iso(&target_motion.pose_at(0.0));
-    let local = match target.as_typed_shape() {
-        TypedShape::TriMesh(_) | TypedShape::HeightField(_) => {
-            swept().transform_by(&pose.inverse())
-        }
-        _ => return false,
-    };
+    let local = swept().transform_by(&pose.inverse());
     let start = out.len();
     match target.as_typed_shape() {
         TypedShape::TriMesh(mesh) => {
