@@ -104,10 +104,19 @@ struct Earliest {
     touching: bool,
 }
 
+/// Most triangles of a fixed mesh a fast shape's path may meet for the
+/// mesh to be split into them (a slow shape's always is, up to
+/// `MAX_PIECES`): one search over a few triangles costs less than the
+/// walk down the whole mesh's tree on every node; over many, the tree
+/// prunes better.
+const MOST_FAST_PIECES: usize = 4;
+
 /// Earliest impact of `moving` against `targets`, all pairs in one search.
 ///
-/// A fixed mesh or heightfield near a slow shape is split into its nearby
-/// triangles first, each a target of its own, as rapier's CCD sweeps them.
+/// A fixed mesh or heightfield near a slow shape, or one whose triangles
+/// a fast shape's path meets at most [`MOST_FAST_PIECES`] of, is split into
+/// those triangles first, each a target of its own, as rapier's CCD sweeps
+/// them.
 ///
 /// A pair close at the start (within [`HandBack::touch_band`] by parry's
 /// gap: the skin, or about rapier's stop for a slow pair) belongs to
@@ -135,7 +144,8 @@ fn earliest(
     rules: &HandBack,
     report: &mut CcdReport,
 ) -> Result<Option<Earliest>, CcdError> {
-    // Fixed meshes near a slow shape: one target per triangle (see
+    // Fixed meshes near a slow shape, or a fast one whose path meets only
+    // a few of their triangles: one target per triangle (see
     // `mesh_triangles`), each known by the target it came from.
     let margin = 2.0 * rules.slop + opts.skin;
     let mut triangles: Vec<MeshPiece> = Vec::new();
@@ -146,19 +156,20 @@ fn earliest(
         let travel = pair_travel(moving.shape, &moving.motion, t.shape, &t.motion);
         travels.push(travel);
         let before = triangles.len();
-        if rules.is_slow(moving.shape, travel)
-            && mesh_triangles(
-                moving.shape,
-                &moving.motion,
-                || swept_aabb(moving.shape, &moving.motion).loosened(margin as f32),
-                t.shape,
-                &t.motion,
-                rules.slop,
-                &mut triangles,
-            )
-        {
+        let pieces = mesh_triangles(
+            moving.shape,
+            &moving.motion,
+            || swept_aabb(moving.shape, &moving.motion).loosened(margin as f32),
+            t.shape,
+            &t.motion,
+            rules.slop,
+            &mut triangles,
+        );
+        let few = triangles.len() - before <= MOST_FAST_PIECES;
+        if pieces && (few || rules.is_slow(moving.shape, travel)) {
             split.extend(std::iter::repeat_n(j, triangles.len() - before));
         } else {
+            triangles.truncate(before);
             origin.push(j);
         }
     }
