@@ -2,16 +2,18 @@
 //! body was clamped, what the clamps changed (see [`sweep_rounds`]). Nothing
 //! is written to the world here; the [`Plan`] is applied afterwards.
 
-use super::candidates::body_box;
+use super::candidates::rough_swept_box;
 use super::clamp;
 use super::moved::Moved;
 use super::push;
 use super::report::{CcdReport, SkipReason};
 use super::sweep::{self, SensorPair, Sweeper, Workspace};
-use super::world::{StageWorld, StepMotions};
+use super::world::{MotionCache, StageWorld, StepMotions};
 use crate::query::QueryOptions;
-use rapier3d::parry::bounding_volume::BoundingVolume;
-use rapier3d::prelude::{BroadPhaseBvh, NarrowPhase, RigidBodyHandle, Vector};
+use rapier3d::parry::bounding_volume::{Aabb, BoundingVolume};
+use rapier3d::prelude::{
+    BroadPhaseBvh, Collider, ColliderHandle, NarrowPhase, RigidBodyHandle, Vector,
+};
 use std::collections::HashSet;
 
 /// What the sweeps found, applied after all of them (so that the order of
@@ -99,9 +101,25 @@ pub(crate) fn sweep_rounds(
             report,
         );
         rounds.cut(scene, found, dt, report);
-        dirty = rounds.next_dirty(scene);
+        dirty = rounds.next_dirty(scene, dt, &mut ws.motions);
     }
     rounds.into_plan()
+}
+
+/// The enabled colliders of `m`'s body.
+fn colliders_of<'a>(
+    scene: &'a StageWorld,
+    m: &Moved,
+) -> impl Iterator<Item = (ColliderHandle, &'a Collider)> + 'a {
+    let handles = scene
+        .bodies
+        .get(m.handle)
+        .map(|rb| rb.colliders())
+        .unwrap_or(&[]);
+    handles
+        .iter()
+        .filter_map(|&h| scene.colliders.get(h).map(|co| (h, co)))
+        .filter(|(_, co)| co.is_enabled())
 }
 
 /// A hit body's motion as a round cuts it: carried by the pusher at index
@@ -304,8 +322,16 @@ impl Rounds {
     }
 
     /// The next round's sweeps: the changed bodies, and the dynamic bodies
-    /// whose swept box meets a changed body's.
-    fn next_dirty(&self, scene: &StageWorld) -> Vec<(usize, Against)> {
+    /// one of whose colliders' swept boxes meets a changed body's, both
+    /// over their motions as cut so far. A collider is first held to the
+    /// box from its body's two poses, which needs no motion built; only
+    /// one that meets a changed box gets its motion's own.
+    fn next_dirty(
+        &self,
+        scene: &StageWorld,
+        dt: f64,
+        cache: &mut MotionCache,
+    ) -> Vec<(usize, Against)> {
         let mut dirty = Vec::new();
         if self.changed.is_empty() {
             return dirty;
@@ -321,11 +347,17 @@ impl Rounds {
             };
             dirty.push((i, against));
         }
-        let boxes: Vec<_> = self
-            .changed
-            .iter()
-            .filter_map(|&i| body_box(scene, &self.current[i]))
-            .collect();
+        let motions = StepMotions::new(&self.current, dt);
+        // `None`: a motion that cannot be built, which meets everything.
+        let mut swept =
+            |h: ColliderHandle, co: &Collider| cache.swept(&motions, h, co, scene.bodies).ok();
+        let mut changed: Vec<Option<Aabb>> = Vec::new();
+        for &i in &self.changed {
+            for (h, co) in colliders_of(scene, &self.current[i]) {
+                changed.push(swept(h, co));
+            }
+        }
+        let meets = |b: &Aabb| changed.iter().any(|c| c.is_none_or(|c| c.intersects(b)));
         for (j, m) in self.current.iter().enumerate() {
             // A carried body rides with its pusher: what it meets is
             // carried in turn, it is not stopped by it.
@@ -338,9 +370,11 @@ impl Rounds {
             if !rb.is_dynamic() || scene.config.opted_out(rb.user_data) {
                 continue;
             }
-            if let Some(b) = body_box(scene, m)
-                && boxes.iter().any(|c| c.intersects(&b))
-            {
+            let hit = colliders_of(scene, m).any(|(h, co)| {
+                meets(&rough_swept_box(&motions, co, scene.bodies))
+                    && swept(h, co).is_none_or(|b| meets(&b))
+            });
+            if hit {
                 dirty.push((j, Against::Changed));
             }
         }
