@@ -93,6 +93,11 @@ pub(crate) enum Interaction {
 pub(crate) struct Candidate {
     pub handle: ColliderHandle,
     pub interaction: Interaction,
+    /// The box it was found with: a moving collider's `own_box`, any
+    /// other's own box. A moving one's motion is built only if this box
+    /// meets the sweeping collider's own swept box too.
+    pub bounds: Aabb,
+    pub moving: bool,
 }
 
 fn body_type(scene: &StageWorld, co: &Collider) -> RigidBodyType {
@@ -195,31 +200,27 @@ pub(crate) fn gather(
         let Some(interaction) = interaction(scene, h1, co1, h2, co2) else {
             continue;
         };
-        if !meets(motions, h2, co2, swept, &mut own_box) {
+        let moving = is_moving(motions, co2);
+        let bounds = if moving {
+            own_box(h2, co2)
+        } else {
+            Some(co2.compute_aabb())
+        };
+        let Some(bounds) = bounds.filter(|b| b.intersects(swept)) else {
             continue;
-        }
+        };
         out.push(Candidate {
             handle: h2,
             interaction,
+            bounds,
+            moving,
         });
     }
 }
 
-/// Whether collider `(h2, co2)` may meet what `swept` holds: a moving
-/// collider by its own swept box, `own_box`, any other by its box.
-pub(crate) fn meets(
-    motions: &StepMotions,
-    h2: ColliderHandle,
-    co2: &Collider,
-    swept: &Aabb,
-    mut own_box: impl FnMut(ColliderHandle, &Collider) -> Option<Aabb>,
-) -> bool {
-    let moving = co2.parent().is_some_and(|b| motions.body(b).is_some());
-    if moving {
-        own_box(h2, co2).is_some_and(|b| b.intersects(swept))
-    } else {
-        co2.compute_aabb().intersects(swept)
-    }
+/// Whether collider `co` moves this step (its body is among the moved).
+pub(crate) fn is_moving(motions: &StepMotions, co: &Collider) -> bool {
+    co.parent().is_some_and(|b| motions.body(b).is_some())
 }
 
 /// A box holding collider `co` over the step, from its body's two poses

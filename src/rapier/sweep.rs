@@ -5,7 +5,7 @@ use super::backoff::{
     HandBack, Stop, pair_relative_travel, pair_travel, stop_after_contact, stop_when_deep,
 };
 use super::candidates::{
-    Candidate, Interaction, MeshPiece, gather, interaction, meets, mesh_triangles, rough_swept_box,
+    Candidate, Interaction, MeshPiece, gather, interaction, mesh_triangles, rough_swept_box,
     swept_aabb,
 };
 use super::moved::Moved;
@@ -458,20 +458,26 @@ pub(crate) fn sweep_body(
         }
         // Then the motion and its own swept box, which the candidates must
         // meet too (a moving one by its own swept box).
+        // A moving candidate's motion is built only when the box it was
+        // found with meets this swept box (most are dropped here).
         let (motion1, swept) = ws.motions.get_swept(motions, h1, co1, scene.bodies)?;
         let mut failure = None;
         let cache = &mut ws.motions;
         ws.candidates.retain(|c| {
+            if !c.bounds.intersects(&swept) {
+                return false;
+            }
+            if !c.moving {
+                return true;
+            }
             let co2 = &scene.colliders[c.handle];
-            meets(motions, c.handle, co2, &swept, |h2, co2| {
-                match cache.swept(motions, h2, co2, scene.bodies) {
-                    Ok(swept) => Some(swept),
-                    Err(e) => {
-                        failure = Some(e);
-                        None
-                    }
+            match cache.swept(motions, c.handle, co2, scene.bodies) {
+                Ok(own) => own.intersects(&swept),
+                Err(e) => {
+                    failure = Some(e);
+                    false
                 }
-            })
+            }
         });
         if let Some(e) = failure {
             return Err(e);
