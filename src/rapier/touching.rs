@@ -153,10 +153,13 @@ pub(super) fn touching_pair(
     // larger prediction makes it visit every mesh part within it. A depth
     // needs none (overlapping parts are always found), so a pair allowed
     // deep (a blade jammed 17 cm into a wall) looks no farther than one
-    // allowed 5 mm. The witness of a stop looks as far as a sample can
+    // allowed 5 mm. A pair with no band (left to the contacts, only kept
+    // from sinking) tells only depths: its samples look just past touching
+    // (an unbounded prediction made each of them measure the distance,
+    // however far). The witness of a stop looks as far as a sample can
     // move, so that it finds the contact near the last allowed time.
-    let reach = past_band(band);
-    let witness_reach = reach + travel / samples as f64;
+    let reach = past_band(if band.is_finite() { band } else { 0.0 });
+    let witness_reach = past_band(band) + travel / samples as f64;
     let width = hi - lo;
     let mut prev = lo;
     for k in 1..=samples {
