@@ -12,7 +12,7 @@
 //! a few millimetres elsewhere than rapier does is enough to send it
 //! tumbling elsewhere.
 
-use super::candidates::{mesh_triangles, swept_aabb_within};
+use super::candidates::{FEW_PIECES, mesh_triangles, swept_aabb_within};
 use super::report::CcdReport;
 use super::search;
 use super::touching::{MAX_TOUCH_SAMPLES, gap_at};
@@ -505,12 +505,6 @@ fn resolve_margin(moving: &ShapeMotion, target: &ShapeMotion) -> f64 {
     1.0e-3 + 1.0e-4 * (reach(moving.shape) + reach(target.shape))
 }
 
-/// Most triangles of a mesh [`stop_when_deep`] searches one by one; past
-/// it the search takes the whole mesh, whose tree prunes the far ones. A
-/// ball landing meets one to four; a capsule sliding across 8-12 of them
-/// (slide_dt025) cost 2 % more searched one by one than through the tree.
-const MOST_DEEP_PIECES: usize = 4;
-
 /// A rounded pair's stop: the first time after its true contact `contact`
 /// and before `until` at which it is `depth` deep (its cores `r1 + r2 -
 /// depth` apart), from the sound query on the cores; `None` when it never
@@ -559,16 +553,15 @@ pub(crate) fn stop_when_deep(
         0.0,
         &mut pieces,
     );
-    let triangles: Option<Vec<ShapeMotion>> =
-        (split && pieces.len() <= MOST_DEEP_PIECES).then(|| {
-            pieces
-                .iter()
-                .map(|p| ShapeMotion {
-                    shape: &p.triangle,
-                    motion: target.motion,
-                })
-                .collect()
-        });
+    let triangles: Option<Vec<ShapeMotion>> = (split && pieces.len() <= FEW_PIECES).then(|| {
+        pieces
+            .iter()
+            .map(|p| ShapeMotion {
+                shape: &p.triangle,
+                motion: target.motion,
+            })
+            .collect()
+    });
     let mover = [ShapeMotion {
         shape: core1,
         motion: moving.motion,
@@ -831,7 +824,7 @@ mod tests {
                 &fixed(),
                 0.0,
                 &mut pieces,
-            ) && pieces.len() <= MOST_DEEP_PIECES
+            ) && pieces.len() <= FEW_PIECES
             {
                 split += 1;
             }

@@ -5,8 +5,8 @@ use super::backoff::{
     HandBack, Stop, pair_relative_travel, pair_travel, stop_after_contact, stop_when_deep,
 };
 use super::candidates::{
-    Candidate, Interaction, MeshPiece, gather, interaction, mesh_triangles, rough_swept_box,
-    swept_aabb,
+    Candidate, FEW_PIECES, Interaction, MeshPiece, gather, interaction, mesh_triangles,
+    rough_swept_box, swept_aabb,
 };
 use super::moved::Moved;
 use super::report::CcdReport;
@@ -104,17 +104,10 @@ struct Earliest {
     touching: bool,
 }
 
-/// Most triangles of a fixed mesh a fast shape's path may meet for the
-/// mesh to be split into them (a slow shape's always is, up to
-/// `MAX_PIECES`): one search over a few triangles costs less than the
-/// walk down the whole mesh's tree on every node; over many, the tree
-/// prunes better.
-const MOST_FAST_PIECES: usize = 4;
-
 /// Earliest impact of `moving` against `targets`, all pairs in one search.
 ///
 /// A fixed mesh or heightfield near a slow shape, or one whose triangles
-/// a fast shape's path meets at most [`MOST_FAST_PIECES`] of, is split into
+/// a fast shape's path meets at most [`FEW_PIECES`] of, is split into
 /// those triangles first, each a target of its own, as rapier's CCD sweeps
 /// them.
 ///
@@ -165,7 +158,7 @@ fn earliest(
             rules.slop,
             &mut triangles,
         );
-        let few = triangles.len() - before <= MOST_FAST_PIECES;
+        let few = triangles.len() - before <= FEW_PIECES;
         if pieces && (few || rules.is_slow(moving.shape, travel)) {
             split.extend(std::iter::repeat_n(j, triangles.len() - before));
         } else {
