@@ -33,6 +33,8 @@ mod pairs;
 mod primitives;
 mod sat;
 
+#[cfg(test)]
+pub(crate) use contact::cross_mesh;
 pub(crate) use contact::{Witness, contact};
 pub use primitives::{PrimitiveToi, edge_edge_toi, vertex_face_toi};
 

@@ -878,36 +878,7 @@ mod tests {
             state ^= state << 17;
             lo + (hi - lo) * (state >> 11) as f64 / (1u64 << 53) as f64
         };
-        let mut corners = Vec::new();
-        for half in [Vector::new(0.6, 0.05, 0.03), Vector::new(0.05, 0.6, 0.03)] {
-            for k in 0..8 {
-                let sign = |bit: i32| if k >> bit & 1 == 0 { -1.0 } else { 1.0 };
-                corners.push(Vector::new(
-                    sign(0) * half.x,
-                    sign(1) * half.y,
-                    sign(2) * half.z,
-                ));
-            }
-        }
-        let faces = |b: u32| {
-            [
-                [0, 2, 6],
-                [0, 6, 4],
-                [1, 5, 7],
-                [1, 7, 3],
-                [0, 4, 5],
-                [0, 5, 1],
-                [2, 3, 7],
-                [2, 7, 6],
-                [0, 1, 3],
-                [0, 3, 2],
-                [4, 6, 7],
-                [4, 7, 5],
-            ]
-            .map(|f: [u32; 3]| f.map(|i| i + b))
-        };
-        let indices: Vec<[u32; 3]> = faces(0).into_iter().chain(faces(8)).collect();
-        let cross = TriMesh::new(corners, indices).unwrap();
+        let cross = crate::query::cross_mesh(0.6, 0.05, 0.03);
         let wall = Cuboid::new(Vector::new(0.5, 0.5, 0.5));
         let wall_at = Isometry3::identity();
         let depth = |m: &Motion, t: f64| {
