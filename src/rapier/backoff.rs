@@ -551,9 +551,10 @@ pub(crate) fn stop_when_deep(
         core2,
         &target.motion,
         0.0,
+        FEW_PIECES,
         &mut pieces,
     );
-    let triangles: Option<Vec<ShapeMotion>> = (split && pieces.len() <= FEW_PIECES).then(|| {
+    let triangles: Option<Vec<ShapeMotion>> = split.then(|| {
         pieces
             .iter()
             .map(|p| ShapeMotion {
@@ -823,9 +824,9 @@ mod tests {
                 &floor,
                 &fixed(),
                 0.0,
+                FEW_PIECES,
                 &mut pieces,
-            ) && pieces.len() <= FEW_PIECES
-            {
+            ) {
                 split += 1;
             }
             compared += 1;

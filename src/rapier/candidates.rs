@@ -282,7 +282,7 @@ pub(crate) const FEW_PIECES: usize = 4;
 
 /// Most triangles of one mesh a slow collider is swept against one by one
 /// ([`mesh_triangles`]); past it the mesh stays whole.
-const MAX_PIECES: usize = 64;
+pub(crate) const MAX_PIECES: usize = 63;
 
 /// One triangle of a mesh target, swept on its own.
 pub(crate) struct MeshPiece {
@@ -300,8 +300,10 @@ pub(crate) struct MeshPiece {
 /// sweeping each on its own as rapier's CCD does: it stops a body at each
 /// triangle of a mesh apart, and leaves to the contacts only the
 /// triangles touching at the start, not the whole mesh. `false` (and
-/// nothing pushed) for other shapes, moving meshes, or [`MAX_PIECES`]
-/// triangles or more. `slop`: rapier's allowed linear error.
+/// nothing pushed) for other shapes, moving meshes, or more than `most`
+/// triangles (at most [`MAX_PIECES`]; the walk stops at the first one
+/// past it). `slop`: rapier's allowed linear error.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn mesh_triangles(
     moving: &dyn Shape,
     moving_motion: &Motion,
@@ -309,6 +311,7 @@ pub(crate) fn mesh_triangles(
     target: &dyn Shape,
     target_motion: &Motion,
     slop: f64,
+    most: usize,
     out: &mut Vec<MeshPiece>,
 ) -> bool {
     if !target_motion.is_fixed() {
@@ -324,10 +327,11 @@ pub(crate) fn mesh_triangles(
     let pose = pose_from_iso(&target_motion.pose_at(0.0));
     let local = swept().transform_by(&pose.inverse());
     let start = out.len();
+    let most = most.min(MAX_PIECES);
     match target.as_typed_shape() {
         TypedShape::TriMesh(mesh) => {
             for i in mesh.bvh().intersect_aabb(&local) {
-                if out.len() - start == MAX_PIECES {
+                if out.len() - start > most {
                     break;
                 }
                 out.push(MeshPiece {
@@ -346,7 +350,7 @@ pub(crate) fn mesh_triangles(
             let (c1, c2) = (at(0.0), at(1.0));
             let fallback = (0.5 * moving.ccd_thickness()).max(slop as f32);
             field.map_elements_in_local_aabb(&local, &mut |_, t| {
-                if out.len() - start < MAX_PIECES {
+                if out.len() - start <= most {
                     let n = (t.b - t.a).cross(t.c - t.a).normalize_or_zero();
                     let (o1, o2) = (n.dot(c1 - t.a), n.dot(c2 - t.a));
                     out.push(MeshPiece {
@@ -358,7 +362,7 @@ pub(crate) fn mesh_triangles(
         }
         _ => return false,
     }
-    if out.len() - start >= MAX_PIECES {
+    if out.len() - start > most {
         out.truncate(start);
         return false;
     }

@@ -5,7 +5,7 @@ use super::backoff::{
     HandBack, Stop, pair_relative_travel, pair_travel, stop_after_contact, stop_when_deep,
 };
 use super::candidates::{
-    Candidate, FEW_PIECES, Interaction, MeshPiece, gather, interaction, mesh_triangles,
+    Candidate, FEW_PIECES, Interaction, MAX_PIECES, MeshPiece, gather, interaction, mesh_triangles,
     rough_swept_box, swept_aabb,
 };
 use super::moved::Moved;
@@ -149,20 +149,23 @@ fn earliest(
         let travel = pair_travel(moving.shape, &moving.motion, t.shape, &t.motion);
         travels.push(travel);
         let before = triangles.len();
-        let pieces = mesh_triangles(
+        let most = if rules.is_slow(moving.shape, travel) {
+            MAX_PIECES
+        } else {
+            FEW_PIECES
+        };
+        if mesh_triangles(
             moving.shape,
             &moving.motion,
             || swept_aabb(moving.shape, &moving.motion).loosened(margin as f32),
             t.shape,
             &t.motion,
             rules.slop,
+            most,
             &mut triangles,
-        );
-        let few = triangles.len() - before <= FEW_PIECES;
-        if pieces && (few || rules.is_slow(moving.shape, travel)) {
+        ) {
             split.extend(std::iter::repeat_n(j, triangles.len() - before));
         } else {
-            triangles.truncate(before);
             origin.push(j);
         }
     }
