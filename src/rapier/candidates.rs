@@ -97,7 +97,6 @@ pub(crate) struct Candidate {
     /// other's own box. A moving one's motion is built only if this box
     /// meets the sweeping collider's own swept box too.
     pub bounds: Aabb,
-    pub moving: bool,
 }
 
 fn body_type(scene: &StageWorld, co: &Collider) -> RigidBodyType {
@@ -200,8 +199,7 @@ pub(crate) fn gather(
         let Some(interaction) = interaction(scene, h1, co1, h2, co2) else {
             continue;
         };
-        let moving = is_moving(motions, co2);
-        let bounds = if moving {
+        let bounds = if is_moving(motions, co2) {
             own_box(h2, co2)
         } else {
             Some(co2.compute_aabb())
@@ -213,7 +211,6 @@ pub(crate) fn gather(
             handle: h2,
             interaction,
             bounds,
-            moving,
         });
     }
 }
@@ -262,13 +259,10 @@ pub(crate) fn rough_swept_box(motions: &StepMotions, co: &Collider, bodies: &Rig
 /// A box holding the body's colliders over its whole (uncut) motion: their
 /// end boxes grown by the body's travel bound.
 pub(crate) fn body_box(scene: &StageWorld, m: &Moved) -> Option<Aabb> {
-    let rb = scene.bodies.get(m.handle)?;
     let margin = ((m.travel * (1.0 + 1.0e-5)) as f32).next_up() + 1.0e-5;
-    rb.colliders()
-        .iter()
-        .filter_map(|h| scene.colliders.get(*h))
-        .filter(|co| co.is_enabled())
-        .map(|co| co.compute_aabb().loosened(margin))
+    scene
+        .colliders_of(m.handle)
+        .map(|(_, co)| co.compute_aabb().loosened(margin))
         .reduce(|a, b| a.merged(&b))
 }
 
@@ -473,7 +467,7 @@ mod tests {
                 prop_assert!(within(&b, &rough), "τ = {}/64: {:?} not in rough {:?}", k, b, rough);
                 prop_assert!(within(&b, &tight), "τ = {}/64: {:?} not in tight {:?}", k, b, tight);
             }
-            // And over a part of the step, the box around its middle.
+            // And over a part of the step, the box of its path there.
             let span = TimeSpan::new(part.0.min(part.1), part.0.max(part.1));
             let partial = swept_aabb_within(co.shape(), &motion, span);
             for k in 0..=64 {

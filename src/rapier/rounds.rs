@@ -106,22 +106,6 @@ pub(crate) fn sweep_rounds(
     rounds.into_plan()
 }
 
-/// The enabled colliders of `m`'s body.
-fn colliders_of<'a>(
-    scene: &'a StageWorld,
-    m: &Moved,
-) -> impl Iterator<Item = (ColliderHandle, &'a Collider)> + 'a {
-    let handles = scene
-        .bodies
-        .get(m.handle)
-        .map(|rb| rb.colliders())
-        .unwrap_or(&[]);
-    handles
-        .iter()
-        .filter_map(|&h| scene.colliders.get(h).map(|co| (h, co)))
-        .filter(|(_, co)| co.is_enabled())
-}
-
 /// A hit body's motion as a round cuts it: carried by the pusher at index
 /// `p` (with the velocity the push gives it), or truncated at its impact
 /// (`true` when the cut motion leaves the old path).
@@ -353,7 +337,7 @@ impl Rounds {
             |h: ColliderHandle, co: &Collider| cache.swept(&motions, h, co, scene.bodies).ok();
         let mut changed: Vec<Option<Aabb>> = Vec::new();
         for &i in &self.changed {
-            for (h, co) in colliders_of(scene, &self.current[i]) {
+            for (h, co) in scene.colliders_of(self.current[i].handle) {
                 changed.push(swept(h, co));
             }
         }
@@ -370,7 +354,7 @@ impl Rounds {
             if !rb.is_dynamic() || scene.config.opted_out(rb.user_data) {
                 continue;
             }
-            let hit = colliders_of(scene, m).any(|(h, co)| {
+            let hit = scene.colliders_of(m.handle).any(|(h, co)| {
                 meets(&rough_swept_box(&motions, co, scene.bodies))
                     && swept(h, co).is_none_or(|b| meets(&b))
             });

@@ -5,8 +5,8 @@ use super::backoff::{
     HandBack, Stop, pair_relative_travel, pair_travel, stop_after_contact, stop_when_deep,
 };
 use super::candidates::{
-    Candidate, FEW_PIECES, Interaction, MAX_PIECES, MeshPiece, gather, interaction, mesh_triangles,
-    rough_swept_box, swept_aabb,
+    Candidate, FEW_PIECES, Interaction, MAX_PIECES, MeshPiece, gather, interaction, is_moving,
+    mesh_triangles, rough_swept_box, swept_aabb,
 };
 use super::moved::Moved;
 use super::report::CcdReport;
@@ -453,9 +453,9 @@ pub(crate) fn sweep_body(
             continue;
         }
         // Then the motion and its own swept box, which the candidates must
-        // meet too (a moving one by its own swept box).
-        // A moving candidate's motion is built only when the box it was
-        // found with meets this swept box (most are dropped here).
+        // meet too: first by the box they were found with (most are dropped
+        // here), a moving one then by its own swept box, its motion built
+        // only now.
         let (motion1, swept) = ws.motions.get_swept(motions, h1, co1, scene.bodies)?;
         let mut failure = None;
         let cache = &mut ws.motions;
@@ -463,10 +463,10 @@ pub(crate) fn sweep_body(
             if !c.bounds.intersects(&swept) {
                 return false;
             }
-            if !c.moving {
+            let co2 = &scene.colliders[c.handle];
+            if !is_moving(motions, co2) {
                 return true;
             }
-            let co2 = &scene.colliders[c.handle];
             match cache.swept(motions, c.handle, co2, scene.bodies) {
                 Ok(own) => own.intersects(&swept),
                 Err(e) => {

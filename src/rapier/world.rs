@@ -27,7 +27,20 @@ pub(crate) struct StageWorld<'a> {
     pub slop: f64,
 }
 
-impl StageWorld<'_> {
+impl<'a> StageWorld<'a> {
+    /// The enabled colliders of `body`, with their handles.
+    pub fn colliders_of(
+        &self,
+        body: RigidBodyHandle,
+    ) -> impl Iterator<Item = (ColliderHandle, &'a Collider)> + 'a {
+        let colliders = self.colliders;
+        let handles = self.bodies.get(body).map_or(&[][..], |rb| rb.colliders());
+        handles
+            .iter()
+            .filter_map(move |&h| colliders.get(h).map(|co| (h, co)))
+            .filter(|(_, co)| co.is_enabled())
+    }
+
     /// The rules a hit is handed back by.
     pub fn hand_back(&self) -> HandBack {
         HandBack {
