@@ -17,7 +17,7 @@ use rapier3d::parry::query::{
     ClosestPoints, Contact, DefaultQueryDispatcher, NonlinearRigidMotion, QueryDispatcher,
     ShapeCastHit, ShapeDistance, ShapeIntersection, Unsupported,
 };
-use rapier3d::parry::shape::{CompositeShape, Shape, SupportMap};
+use rapier3d::parry::shape::{CompositeShape, HeightField, Shape, SupportMap};
 
 /// parry's contact between two posed shapes within `prediction` metres
 /// (`Ok(None)`: farther apart; `Err`: parry has no answer for the pair).
@@ -35,13 +35,56 @@ pub(crate) fn contact(
     shape2: &dyn Shape,
     prediction: f32,
 ) -> Result<Option<Contact>, Unsupported> {
+    contact_settled(pose1, shape1, pose2, shape2, prediction, None)
+}
+
+/// What a caller asks of a contact that needs only to tell whether the
+/// pair is deeper than `allowed` metres (`≥ 0`), within `band` metres, or
+/// farther apart (a touching pair's sample, `rapier::touching`): once a
+/// part of a composite shape is found within `band`, the other parts are
+/// asked only whether they are deeper than `allowed`, and the first part
+/// that is ends the walk.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Settle {
+    pub band: f64,
+    pub allowed: f64,
+}
+
+impl Settle {
+    /// The least prediction, in `f32`, at or above minus `allowed`: a box
+    /// or triangle part whose separating axes show it beyond that is not
+    /// deeper than allowed (its `f32` distance rounds to no less).
+    fn deeper_than_allowed(&self) -> Real {
+        let reach = (-self.allowed) as Real;
+        if f64::from(reach) < -self.allowed {
+            reach.next_up()
+        } else {
+            reach
+        }
+    }
+}
+
+/// [`contact`], whose `dist` answers a [`Settle`] caller's questions as
+/// `contact`'s would: deeper than `allowed` exactly when `contact`'s is
+/// (then the distance of some part that is), within `band` exactly when
+/// `contact`'s is (then of some part within it, not deeper than allowed,
+/// and its other fields that part's), and otherwise `contact`'s answer
+/// itself. `None` asks for `contact`'s answer.
+pub(crate) fn contact_settled(
+    pose1: &Pose,
+    shape1: &dyn Shape,
+    pose2: &Pose,
+    shape2: &dyn Shape,
+    prediction: f32,
+    settle: Option<Settle>,
+) -> Result<Option<Contact>, Unsupported> {
     let flip = shape2.as_halfspace().is_some() && shape1.as_halfspace().is_none();
     let (p1, s1, p2, s2) = if flip {
         (pose2, shape2, pose1, shape1)
     } else {
         (pose1, shape1, pose2, shape2)
     };
-    let found = AxesFirst.contact(&p1.inv_mul(p2), s1, s2, prediction)?;
+    let found = AxesFirst.contact_settled(&p1.inv_mul(p2), s1, s2, prediction, settle)?;
     Ok(found.map(|mut c| {
         c.transform_by_mut(p1, p2);
         if flip { c.flipped() } else { c }
@@ -122,21 +165,31 @@ fn capsule_cuboid(
 /// than `prediction`: parry's GJK, which measures them, rounds its stop
 /// differently with a smaller one, and other parts go to parry's own
 /// contacts, which are not written for a negative one.
+///
+/// With `settle` (and `allowed ≥ 0`), once a part is within the band a box
+/// or triangle part is asked within the lesser of that part's distance and
+/// minus `allowed`, and the first part deeper than allowed ends the walk
+/// (see [`contact_settled`]): a box resting on a flat mesh overlaps every
+/// triangle under it by about the same depth, which sets no bound on the
+/// others, while the allowed depth turns most of them away at their face.
 fn composite_contact(
     dispatcher: &AxesFirst,
     pos12: &Pose,
     g1: &dyn CompositeShape,
     g2: &dyn Shape,
     prediction: Real,
+    settle: Option<Settle>,
 ) -> Option<Contact> {
+    let settle = settle.filter(|s| s.allowed >= 0.0);
     let near = g2.compute_aabb(pos12).loosened(prediction);
     let mut best: Option<(u32, Contact)> = None;
     for part in g1.bvh().intersect_aabb(&near) {
+        let best_dist = best.as_ref().map(|(_, b)| b.dist);
+        if is_settled(best_dist, settle) {
+            break;
+        }
         g1.map_part_at(part, &mut |part_pose, shape, _| {
-            let reach = match &best {
-                Some((_, b)) if b.dist < 0.0 && sat::handles(shape, g2) => b.dist,
-                _ => prediction,
-            };
+            let reach = part_reach(best_dist, settle, shape, g2, prediction);
             let pose = part_pose.map_or(*pos12, |p| p.inv_mul(pos12));
             if let Ok(Some(mut c)) = dispatcher.contact(&pose, shape, g2, reach)
                 && best.as_ref().is_none_or(|(_, b)| c.dist < b.dist)
@@ -154,19 +207,81 @@ fn composite_contact(
     })
 }
 
+/// parry's heightfield contact (the deepest or closest of its triangles
+/// near `g2`, placed by `pos12` in the field's frame), with the pruning
+/// of [`composite_contact`].
+fn heightfield_contact(
+    dispatcher: &AxesFirst,
+    pos12: &Pose,
+    field: &HeightField,
+    g2: &dyn Shape,
+    prediction: Real,
+    settle: Option<Settle>,
+) -> Option<Contact> {
+    let settle = settle.filter(|s| s.allowed >= 0.0);
+    let near = g2.compute_aabb(pos12).loosened(prediction.max(0.0));
+    let mut best: Option<Contact> = None;
+    field.map_elements_in_local_aabb(&near, &mut |_, triangle| {
+        let best_dist = best.as_ref().map(|b| b.dist);
+        if is_settled(best_dist, settle) {
+            return;
+        }
+        let reach = part_reach(best_dist, settle, triangle, g2, prediction);
+        if let Ok(Some(c)) = dispatcher.contact(pos12, triangle, g2, reach)
+            && best.as_ref().is_none_or(|b| c.dist < b.dist)
+        {
+            best = Some(c);
+        }
+    });
+    best
+}
+
+/// Whether the best part so far, at `best` metres, answers a settling
+/// caller: it is deeper than allowed.
+fn is_settled(best: Option<Real>, settle: Option<Settle>) -> bool {
+    matches!((best, settle), (Some(d), Some(s)) if f64::from(d) < -s.allowed)
+}
+
+/// How far a composite's `part` is asked, the best part so far at `best`
+/// metres (see [`composite_contact`]): a box or triangle within an
+/// overlap so far, or for a settling caller once a part is within the
+/// band, within the lesser of that part's distance and minus `allowed`
+/// (either bound shows a part beyond it not deeper than allowed, and both
+/// are at most 0, so no part is then measured by GJK); any other part
+/// within `prediction`.
+fn part_reach(
+    best: Option<Real>,
+    settle: Option<Settle>,
+    part: &dyn Shape,
+    g2: &dyn Shape,
+    prediction: Real,
+) -> Real {
+    let Some(d) = best.filter(|_| sat::handles(part, g2)) else {
+        return prediction;
+    };
+    match settle {
+        Some(s) if f64::from(d) <= s.band => d.min(s.deeper_than_allowed()),
+        _ if d < 0.0 => d,
+        _ => prediction,
+    }
+}
+
 /// parry's query dispatcher, except for contacts: two boxes or triangles
 /// by their separating axes (see `sat`), and composite shapes through this
 /// dispatcher, so that their triangles and boxes get the axes too. parry's
 /// own composite contacts recurse through parry's dispatcher.
 struct AxesFirst;
 
-impl QueryDispatcher for AxesFirst {
-    fn contact(
+impl AxesFirst {
+    /// The dispatcher's contact, a composite shape's settled for `settle`
+    /// (see [`contact_settled`]).
+    fn contact_settled(
         &self,
         pos12: &Pose,
         g1: &dyn Shape,
         g2: &dyn Shape,
         prediction: Real,
+        settle: Option<Settle>,
     ) -> Result<Option<Contact>, Unsupported> {
         if sat::handles(g1, g2) {
             match sat::contact(pos12, g1, g2, prediction as f64) {
@@ -180,20 +295,32 @@ impl QueryDispatcher for AxesFirst {
                 SatAnswer::Unknown => {}
             }
         } else if let Some(field) = g1.as_heightfield() {
-            return Ok(details::contact_heightfield_shape(
-                self, pos12, field, g2, prediction,
+            return Ok(heightfield_contact(
+                self, pos12, field, g2, prediction, settle,
             ));
         } else if let Some(field) = g2.as_heightfield() {
-            return Ok(details::contact_shape_heightfield(
-                self, pos12, g1, field, prediction,
-            ));
+            let flipped =
+                heightfield_contact(self, &pos12.inverse(), field, g1, prediction, settle);
+            return Ok(flipped.map(|c| c.flipped()));
         } else if let Some(c1) = g1.as_composite_shape() {
-            return Ok(composite_contact(self, pos12, c1, g2, prediction));
+            return Ok(composite_contact(self, pos12, c1, g2, prediction, settle));
         } else if let Some(c2) = g2.as_composite_shape() {
-            let flipped = composite_contact(self, &pos12.inverse(), c2, g1, prediction);
+            let flipped = composite_contact(self, &pos12.inverse(), c2, g1, prediction, settle);
             return Ok(flipped.map(|c| c.flipped()));
         }
         DefaultQueryDispatcher.contact(pos12, g1, g2, prediction)
+    }
+}
+
+impl QueryDispatcher for AxesFirst {
+    fn contact(
+        &self,
+        pos12: &Pose,
+        g1: &dyn Shape,
+        g2: &dyn Shape,
+        prediction: Real,
+    ) -> Result<Option<Contact>, Unsupported> {
+        self.contact_settled(pos12, g1, g2, prediction, None)
     }
 
     fn intersection_test(
@@ -415,7 +542,7 @@ pub(crate) fn cross_mesh(long: f32, wide: f32, thick: f32) -> rapier3d::parry::s
 mod tests {
     use super::*;
     use rapier3d::math::Rotation;
-    use rapier3d::parry::shape::{Ball, Capsule, Cuboid, HeightField, TriMesh};
+    use rapier3d::parry::shape::{Ball, Capsule, Cuboid, HeightField, TriMesh, Triangle};
 
     /// Seeded numbers in `[0, 1)` (a linear congruential generator).
     fn uniform(mut seed: u64) -> impl FnMut() -> f32 {
@@ -545,6 +672,145 @@ mod tests {
     /// triangles only within the deepest overlap so far answers exactly as
     /// parry's own composite loop over the same dispatcher (every field
     /// bit for bit), and the cases are mostly overlaps.
+    /// A contact settled for a touching pair's sample tells deeper than
+    /// allowed, within the band, or beyond exactly as the full contact
+    /// does (beyond: the same distance), for boxes and capsules resting on
+    /// a fine flat mesh, boxes on a wavy heightfield and a cross mesh jammed
+    /// into a wall, either order.
+    #[test]
+    fn settled_contacts_answer_as_the_full_contact() {
+        let n = 17;
+        let mut vertices = Vec::new();
+        let mut indices = Vec::new();
+        for i in 0..n {
+            for j in 0..n {
+                vertices.push(Vector::new(
+                    0.25 * i as f32 - 2.0,
+                    0.0,
+                    0.25 * j as f32 - 2.0,
+                ));
+            }
+        }
+        for i in 0..n - 1 {
+            for j in 0..n - 1 {
+                let k = (i * n + j) as u32;
+                indices.push([k, k + 1, k + n as u32]);
+                indices.push([k + 1, k + n as u32 + 1, k + n as u32]);
+            }
+        }
+        let flat = TriMesh::new(vertices, indices).expect("a valid mesh");
+        let (_, field) = floors();
+        let cross = cross_mesh(0.85, 0.05, 0.02);
+        let wall = Cuboid::new(Vector::new(0.02, 2.0, 2.0));
+        let slab = Cuboid::new(Vector::new(0.6, 0.05, 0.4));
+        let capsule = Capsule::new_x(0.5, 0.05);
+        let mut next = uniform(29u64);
+        let mut classes = [0usize; 3];
+        for case in 0..1200 {
+            let (mesh, body, pose): (&dyn Shape, &dyn Shape, Pose) = if case % 4 == 3 {
+                let at = Vector::new(6.0 * next() - 3.0, 0.6 * next() - 0.3, 6.0 * next() - 3.0);
+                let tilt = Rotation::from_axis_angle(Vector::Z, 0.6 * next() - 0.3);
+                (&field, &slab, Pose::from_parts(at, tilt))
+            } else if case % 3 == 0 {
+                let at = Vector::new(1.2 * next() - 0.6, 0.4 * next() - 0.2, 0.4 * next() - 0.2);
+                let axis =
+                    Vector::new(next() - 0.5, next() - 0.5, next() - 0.5).normalize_or(Vector::Z);
+                let turn = Rotation::from_axis_angle(axis, 6.0 * next());
+                (&cross, &wall, Pose::from_parts(at, turn))
+            } else {
+                let body: &dyn Shape = if case % 3 == 1 { &slab } else { &capsule };
+                let at = Vector::new(
+                    2.0 * next() - 1.0,
+                    0.035 + 0.03 * next(),
+                    2.0 * next() - 1.0,
+                );
+                let tilt = Rotation::from_axis_angle(Vector::X, 0.1 * next() - 0.05);
+                (&flat, body, Pose::from_parts(at, tilt))
+            };
+            let band = f64::from(0.01 * next());
+            let allowed = f64::from(0.02 * next());
+            let prediction = (band + 1.0e-3) as f32;
+            let settle = Some(Settle { band, allowed });
+            let class = |d: Option<f32>| match d.map_or(f64::from(prediction), f64::from) {
+                g if -g > allowed => 0,
+                g if g <= band => 1,
+                _ => 2,
+            };
+            for flip in [false, true] {
+                let ground = Pose::IDENTITY;
+                let (p1, s1, p2, s2) = if flip {
+                    (&pose, body, &ground, mesh)
+                } else {
+                    (&ground, mesh, &pose, body)
+                };
+                let full = contact(p1, s1, p2, s2, prediction).unwrap().map(|c| c.dist);
+                let settled = contact_settled(p1, s1, p2, s2, prediction, settle)
+                    .unwrap()
+                    .map(|c| c.dist);
+                assert_eq!(
+                    class(settled),
+                    class(full),
+                    "case {case}: {settled:?} vs {full:?}"
+                );
+                if class(full) == 2 {
+                    assert_eq!(settled, full, "case {case}");
+                }
+                classes[class(full)] += 1;
+            }
+        }
+        println!("deeper, within, beyond: {classes:?}");
+        assert!(classes.iter().all(|&k| k > 300), "classes {classes:?}");
+    }
+
+    /// The same for a heightfield: boxes and triangles sunk into the wavy
+    /// field at random, either side first, every field equal to parry's
+    /// loop over the same dispatcher.
+    #[test]
+    fn heightfield_contacts_are_parrys_loop_exactly() {
+        let (_, field) = floors();
+        let slab = Cuboid::new(Vector::new(0.7, 0.1, 0.5));
+        let triangle = Triangle::new(
+            Vector::new(-0.6, 0.0, -0.4),
+            Vector::new(0.7, 0.05, -0.3),
+            Vector::new(0.0, -0.05, 0.8),
+        );
+        let mut next = uniform(13u64);
+        let (mut overlaps, mut compared) = (0, 0);
+        for case in 0..600 {
+            let body: &dyn Shape = if case % 4 == 0 { &triangle } else { &slab };
+            let at = Vector::new(6.0 * next() - 3.0, 0.8 * next() - 0.4, 6.0 * next() - 3.0);
+            let axis =
+                Vector::new(next() - 0.5, next() - 0.5, next() - 0.5).normalize_or(Vector::Y);
+            let pose = Pose::from_parts(at, Rotation::from_axis_angle(axis, 6.0 * next()));
+            let prediction = 0.01 * next();
+            let ours = AxesFirst.contact(&pose, body, &field, prediction).unwrap();
+            let loop_of_parry =
+                details::contact_shape_heightfield(&AxesFirst, &pose, body, &field, prediction);
+            assert_eq!(
+                format!("{ours:?}"),
+                format!("{loop_of_parry:?}"),
+                "case {case}"
+            );
+            let inverse = pose.inverse();
+            let ours = AxesFirst
+                .contact(&inverse, &field, body, prediction)
+                .unwrap();
+            let loop_of_parry =
+                details::contact_heightfield_shape(&AxesFirst, &inverse, &field, body, prediction);
+            assert_eq!(
+                format!("{ours:?}"),
+                format!("{loop_of_parry:?}"),
+                "case {case}"
+            );
+            compared += 1;
+            overlaps += usize::from(ours.is_some_and(|c| c.dist < 0.0));
+        }
+        assert!(
+            overlaps * 4 > compared,
+            "only {overlaps} of {compared} overlap"
+        );
+    }
+
     #[test]
     fn composite_contacts_are_parrys_loop_exactly() {
         let cross = cross_mesh(0.85, 0.05, 0.02);

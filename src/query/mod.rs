@@ -35,7 +35,7 @@ mod sat;
 
 #[cfg(test)]
 pub(crate) use contact::cross_mesh;
-pub(crate) use contact::{Witness, contact};
+pub(crate) use contact::{Settle, Witness, contact, contact_settled};
 pub use primitives::{PrimitiveToi, edge_edge_toi, vertex_face_toi};
 
 use crate::enclosure::{Arithmetic, TimeSpan};

@@ -15,7 +15,7 @@ use crate::convert::{pose_from_iso, vec_from_glam};
 use crate::enclosure::TimeSpan;
 use crate::error::CcdError;
 use crate::motion::{Motion, Trajectory};
-use crate::query::{QueryOptions, ShapeMotion, Toi, Witness, contact};
+use crate::query::{QueryOptions, Settle, ShapeMotion, Toi, Witness, contact_settled};
 use crate::solve::RootStatus;
 use rapier3d::parry::query::Contact;
 use rapier3d::parry::shape::Shape;
@@ -31,9 +31,24 @@ pub(super) fn gap_at(
     tau: f64,
     reach: f64,
 ) -> Option<(f64, Option<Contact>)> {
+    gap_settled(s1, m1, s2, m2, tau, reach, None)
+}
+
+/// [`gap_at`] for a caller that asks only whether the gap is deeper than
+/// `settle.allowed`, within `settle.band`, or beyond (see
+/// `query::contact_settled`): each answer is `gap_at`'s, for less.
+fn gap_settled(
+    s1: &dyn Shape,
+    m1: &Motion,
+    s2: &dyn Shape,
+    m2: &Motion,
+    tau: f64,
+    reach: f64,
+    settle: Option<Settle>,
+) -> Option<(f64, Option<Contact>)> {
     let p1 = pose_from_iso(&m1.pose_at(tau));
     let p2 = pose_from_iso(&m2.pose_at(tau));
-    let found = contact(&p1, s1, &p2, s2, reach as f32);
+    let found = contact_settled(&p1, s1, &p2, s2, reach as f32, settle);
     match found {
         Ok(Some(c)) => Some((c.dist as f64, Some(c))),
         Ok(None) => Some((reach, None)),
@@ -160,11 +175,15 @@ pub(super) fn touching_pair(
     // move, so that it finds the contact near the last allowed time.
     let reach = past_band(if band.is_finite() { band } else { 0.0 });
     let witness_reach = past_band(band) + travel / samples as f64;
+    // Nor does a sample need the deepest part of a mesh once one is
+    // within the band: only whether some part is deeper than allowed.
+    let settle = Some(Settle { band, allowed });
+    let sample = |tau: f64| gap_settled(s1, m1, s2, m2, tau, reach, settle);
     let width = hi - lo;
     let mut prev = lo;
     for k in 1..=samples {
         let tau = lo + width * k as f64 / samples as f64;
-        let Some((gap, _)) = gap_at(s1, m1, s2, m2, tau, reach) else {
+        let Some((gap, _)) = sample(tau) else {
             return Ok(None);
         };
         if k == 1
@@ -183,11 +202,10 @@ pub(super) fn touching_pair(
             // bisection its twelve steps down to the same answer.
             let (mut ok, mut bad) = (prev, tau);
             let finest = prev + (tau - prev) / HALVING_SHARE;
-            let sinks_at_once = finest > prev
-                && gap_at(s1, m1, s2, m2, finest, reach).is_none_or(|(g, _)| -g > allowed);
+            let sinks_at_once = finest > prev && sample(finest).is_none_or(|(g, _)| -g > allowed);
             for _ in 0..if sinks_at_once { 0 } else { HALVINGS } {
                 let mid = 0.5 * (ok + bad);
-                match gap_at(s1, m1, s2, m2, mid, reach) {
+                match sample(mid) {
                     Some((g, _)) if -g <= allowed => ok = mid,
                     _ => bad = mid,
                 }
