@@ -183,15 +183,30 @@ fn composite_contact(
     let settle = settle.filter(|s| s.allowed >= 0.0);
     let near = g2.compute_aabb(pos12).loosened(prediction);
     let mut best: Option<(u32, Contact)> = None;
+    let g2_polytope = sat::is_polytope(g2);
+    let mut placed = None;
     for part in g1.bvh().intersect_aabb(&near) {
         let best_dist = best.as_ref().map(|(_, b)| b.dist);
         if is_settled(best_dist, settle) {
             break;
         }
         g1.map_part_at(part, &mut |part_pose, shape, _| {
-            let reach = part_reach(best_dist, settle, shape, g2, prediction);
-            let pose = part_pose.map_or(*pos12, |p| p.inv_mul(pos12));
-            if let Ok(Some(mut c)) = dispatcher.contact(&pose, shape, g2, reach)
+            let polytope = g2_polytope && sat::is_polytope(shape);
+            let reach = part_reach(best_dist, settle, polytope, prediction);
+            let found = match part_pose {
+                // A mesh's triangle, in the mesh's frame: `g2` is placed
+                // once for all of them.
+                None if polytope => {
+                    let placed = placed.get_or_insert_with(|| sat::Placed::new(pos12, g2));
+                    let axes = sat::contact_placed(shape, placed, f64::from(reach));
+                    dispatcher.polytopes(pos12, shape, g2, reach, axes)
+                }
+                _ => {
+                    let pose = part_pose.map_or(*pos12, |p| p.inv_mul(pos12));
+                    dispatcher.contact(&pose, shape, g2, reach)
+                }
+            };
+            if let Ok(Some(mut c)) = found
                 && best.as_ref().is_none_or(|(_, b)| c.dist < b.dist)
             {
                 if let Some(p) = part_pose {
@@ -221,13 +236,23 @@ fn heightfield_contact(
     let settle = settle.filter(|s| s.allowed >= 0.0);
     let near = g2.compute_aabb(pos12).loosened(prediction.max(0.0));
     let mut best: Option<Contact> = None;
+    // Every triangle is in the field's frame: `g2` is placed once.
+    let polytope = sat::is_polytope(g2);
+    let mut placed = None;
     field.map_elements_in_local_aabb(&near, &mut |_, triangle| {
         let best_dist = best.as_ref().map(|b| b.dist);
         if is_settled(best_dist, settle) {
             return;
         }
-        let reach = part_reach(best_dist, settle, triangle, g2, prediction);
-        if let Ok(Some(c)) = dispatcher.contact(pos12, triangle, g2, reach)
+        let reach = part_reach(best_dist, settle, polytope, prediction);
+        let found = if polytope {
+            let placed = placed.get_or_insert_with(|| sat::Placed::new(pos12, g2));
+            let axes = sat::contact_placed(triangle, placed, f64::from(reach));
+            dispatcher.polytopes(pos12, triangle, g2, reach, axes)
+        } else {
+            dispatcher.contact(pos12, triangle, g2, reach)
+        };
+        if let Ok(Some(c)) = found
             && best.as_ref().is_none_or(|b| c.dist < b.dist)
         {
             best = Some(c);
@@ -242,8 +267,9 @@ fn is_settled(best: Option<Real>, settle: Option<Settle>) -> bool {
     matches!((best, settle), (Some(d), Some(s)) if f64::from(d) < -s.allowed)
 }
 
-/// How far a composite's `part` is asked, the best part so far at `best`
-/// metres (see [`composite_contact`]): a box or triangle within an
+/// How far a composite's part is asked, the best part so far at `best`
+/// metres (see [`composite_contact`]): a box or triangle (`polytope`,
+/// with `g2` one too) within an
 /// overlap so far, or for a settling caller once a part is within the
 /// band, within the lesser of that part's distance and minus `allowed`
 /// (either bound shows a part beyond it not deeper than allowed, and both
@@ -252,11 +278,10 @@ fn is_settled(best: Option<Real>, settle: Option<Settle>) -> bool {
 fn part_reach(
     best: Option<Real>,
     settle: Option<Settle>,
-    part: &dyn Shape,
-    g2: &dyn Shape,
+    polytope: bool,
     prediction: Real,
 ) -> Real {
-    let Some(d) = best.filter(|_| sat::handles(part, g2)) else {
+    let Some(d) = best.filter(|_| polytope) else {
         return prediction;
     };
     match settle {
@@ -273,6 +298,32 @@ fn part_reach(
 struct AxesFirst;
 
 impl AxesFirst {
+    /// The contact of two boxes or triangles from what their separating
+    /// axes said within `prediction` (`sat`): parry's GJK along the best
+    /// axis when apart within it, parry's dispatcher when the axes cannot
+    /// tell.
+    #[inline]
+    fn polytopes(
+        &self,
+        pos12: &Pose,
+        g1: &dyn Shape,
+        g2: &dyn Shape,
+        prediction: Real,
+        sat: SatAnswer,
+    ) -> Result<Option<Contact>, Unsupported> {
+        match sat {
+            SatAnswer::Beyond => return Ok(None),
+            SatAnswer::Overlap(c) => return Ok(Some(c)),
+            SatAnswer::Apart(axis) => {
+                if let (Some(s1), Some(s2)) = (g1.as_support_map(), g2.as_support_map()) {
+                    return Ok(gjk_contact(pos12, s1, s2, prediction, axis));
+                }
+            }
+            SatAnswer::Unknown => {}
+        }
+        DefaultQueryDispatcher.contact(pos12, g1, g2, prediction)
+    }
+
     /// The dispatcher's contact, a composite shape's settled for `settle`
     /// (see [`contact_settled`]).
     fn contact_settled(
@@ -284,16 +335,8 @@ impl AxesFirst {
         settle: Option<Settle>,
     ) -> Result<Option<Contact>, Unsupported> {
         if sat::handles(g1, g2) {
-            match sat::contact(pos12, g1, g2, prediction as f64) {
-                SatAnswer::Beyond => return Ok(None),
-                SatAnswer::Overlap(c) => return Ok(Some(c)),
-                SatAnswer::Apart(axis) => {
-                    if let (Some(s1), Some(s2)) = (g1.as_support_map(), g2.as_support_map()) {
-                        return Ok(gjk_contact(pos12, s1, s2, prediction, axis));
-                    }
-                }
-                SatAnswer::Unknown => {}
-            }
+            let axes = sat::contact(pos12, g1, g2, prediction as f64);
+            return self.polytopes(pos12, g1, g2, prediction, axes);
         } else if let Some(field) = g1.as_heightfield() {
             return Ok(heightfield_contact(
                 self, pos12, field, g2, prediction, settle,

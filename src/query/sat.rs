@@ -191,8 +191,12 @@ enum Axis {
 /// Whether both shapes are boxes or triangles (the pairs [`contact`]
 /// answers).
 pub(crate) fn handles(shape1: &dyn Shape, shape2: &dyn Shape) -> bool {
-    let polytope = |s: &dyn Shape| s.as_cuboid().is_some() || s.as_triangle().is_some();
-    polytope(shape1) && polytope(shape2)
+    is_polytope(shape1) && is_polytope(shape2)
+}
+
+/// Whether `shape` is a box or a triangle.
+pub(crate) fn is_polytope(shape: &dyn Shape) -> bool {
+    shape.as_cuboid().is_some() || shape.as_triangle().is_some()
 }
 
 /// Two boxes or triangles by their separating axes, the second placed by
@@ -204,22 +208,44 @@ pub(crate) fn contact(
     shape2: &dyn Shape,
     prediction: f64,
 ) -> SatAnswer {
-    let raw = iso_from_pose(pos12);
-    let iso12 = Isometry3::from_parts(
-        raw.translation,
-        UnitQuaternion::new_normalize(raw.rotation.into_inner()),
-    );
-    let rotation12 = *iso12.rotation.to_rotation_matrix().matrix();
-    let translation12 = iso12.translation.vector;
+    contact_placed(shape1, &Placed::new(pos12, shape2), prediction)
+}
+
+/// The second shape of [`contact`] placed in the first's frame, made once
+/// for the many parts of a mesh or heightfield that meet it (each part is
+/// in the composite's own frame, so they all see it at the same pose).
+pub(crate) struct Placed {
+    iso12: Isometry3<f64>,
+    /// `None`: not a box or triangle, or not finite.
+    solid: Option<Solid>,
+}
+
+impl Placed {
+    pub fn new(pos12: &Pose, shape2: &dyn Shape) -> Placed {
+        let raw = iso_from_pose(pos12);
+        let iso12 = Isometry3::from_parts(
+            raw.translation,
+            UnitQuaternion::new_normalize(raw.rotation.into_inner()),
+        );
+        let rotation12 = *iso12.rotation.to_rotation_matrix().matrix();
+        let solid =
+            Solid::of(shape2, &rotation12, &iso12.translation.vector).filter(|s| s.is_finite());
+        Placed { iso12, solid }
+    }
+}
+
+/// [`contact`] with its second shape placed already.
+pub(crate) fn contact_placed(shape1: &dyn Shape, placed: &Placed, prediction: f64) -> SatAnswer {
     let (Some(s1), Some(s2)) = (
         Solid::of(shape1, &Matrix3::identity(), &Vector3::zeros()),
-        Solid::of(shape2, &rotation12, &translation12),
+        placed.solid,
     ) else {
         return SatAnswer::Unknown;
     };
-    if !(s1.is_finite() && s2.is_finite()) {
+    if !s1.is_finite() {
         return SatAnswer::Unknown;
     }
+    let iso12 = placed.iso12;
     // The largest separation so far, along which unit axis (oriented from
     // the first shape towards the second), of which kind.
     let mut best = (f64::NEG_INFINITY, Vector3::x(), Axis::FaceOfFirst);
