@@ -193,18 +193,21 @@ pub(crate) fn gather(
     let margin = ((motions.margin * (1.0 + 1.0e-5)) as f32).next_up();
     let wide = swept.loosened(margin);
     for (h2, co2) in query.intersect_aabb_conservative(wide) {
-        if !wanted(co2) {
+        // The boxes first: most colliders the widened box finds are
+        // farther, and the pair rules (groups, joints, the user's hooks)
+        // cost more than a box.
+        if h2 == h1 || !wanted(co2) {
             continue;
         }
-        let Some(interaction) = interaction(scene, h1, co1, h2, co2) else {
-            continue;
-        };
         let bounds = if is_moving(motions, co2) {
             own_box(h2, co2)
         } else {
             Some(co2.compute_aabb())
         };
         let Some(bounds) = bounds.filter(|b| b.intersects(swept)) else {
+            continue;
+        };
+        let Some(interaction) = interaction(scene, h1, co1, h2, co2) else {
             continue;
         };
         out.push(Candidate {
