@@ -168,8 +168,9 @@ pub(crate) fn interaction(
 }
 
 /// The colliders the fast collider `(h1, co1)` with swept box `swept` may
-/// meet, of those `wanted`, with how each pair is handled (see [`meets`]
-/// for the boxes).
+/// meet, of those `wanted`, with how each pair is handled
+/// ([`interaction`]) and the box each was found with: a moving one's from
+/// `own_box`, any other's its own.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn gather(
     scene: &StageWorld,
