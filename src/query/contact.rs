@@ -601,11 +601,22 @@ mod tests {
     fn floors() -> (TriMesh, HeightField) {
         let n = 9;
         let height = |i: usize, j: usize| 0.3 * ((i as f32 * 0.9).sin() + (j as f32 * 0.7).cos());
+        let mesh = grid(n, 1.0, height);
+        let heights = rapier3d::parry::utils::Array2::from_fn(n, n, height);
+        let field = HeightField::new(heights, Vector::new(8.0, 1.0, 8.0));
+        (mesh, field)
+    }
+
+    /// A square grid of `n × n` vertices `spacing` apart about the origin,
+    /// at `height(i, j)`, two triangles a cell.
+    fn grid(n: usize, spacing: f32, height: impl Fn(usize, usize) -> f32) -> TriMesh {
+        let half = spacing * (n - 1) as f32 / 2.0;
         let mut vertices = Vec::new();
         let mut indices = Vec::new();
         for i in 0..n {
             for j in 0..n {
-                vertices.push(Vector::new(i as f32 - 4.0, height(i, j), j as f32 - 4.0));
+                let (x, z) = (spacing * i as f32 - half, spacing * j as f32 - half);
+                vertices.push(Vector::new(x, height(i, j), z));
             }
         }
         for i in 0..n - 1 {
@@ -615,10 +626,7 @@ mod tests {
                 indices.push([k + 1, k + n as u32 + 1, k + n as u32]);
             }
         }
-        let mesh = TriMesh::new(vertices, indices).expect("a valid mesh");
-        let heights = rapier3d::parry::utils::Array2::from_fn(n, n, height);
-        let field = HeightField::new(heights, Vector::new(8.0, 1.0, 8.0));
-        (mesh, field)
+        TriMesh::new(vertices, indices).expect("a valid mesh")
     }
 
     /// Boxes and balls dropped onto both floors at random: the contact
@@ -722,26 +730,7 @@ mod tests {
     /// into a wall, either order.
     #[test]
     fn settled_contacts_answer_as_the_full_contact() {
-        let n = 17;
-        let mut vertices = Vec::new();
-        let mut indices = Vec::new();
-        for i in 0..n {
-            for j in 0..n {
-                vertices.push(Vector::new(
-                    0.25 * i as f32 - 2.0,
-                    0.0,
-                    0.25 * j as f32 - 2.0,
-                ));
-            }
-        }
-        for i in 0..n - 1 {
-            for j in 0..n - 1 {
-                let k = (i * n + j) as u32;
-                indices.push([k, k + 1, k + n as u32]);
-                indices.push([k + 1, k + n as u32 + 1, k + n as u32]);
-            }
-        }
-        let flat = TriMesh::new(vertices, indices).expect("a valid mesh");
+        let flat = grid(17, 0.25, |_, _| 0.0);
         let (_, field) = floors();
         let cross = cross_mesh(0.85, 0.05, 0.02);
         let wall = Cuboid::new(Vector::new(0.02, 2.0, 2.0));
@@ -805,6 +794,15 @@ mod tests {
         assert!(classes.iter().all(|&k| k > 300), "classes {classes:?}");
     }
 
+    /// Every field of two contacts (or none) equal, bit for bit.
+    fn same_answer(ours: Option<Contact>, loop_of_parry: Option<Contact>, case: usize) {
+        assert_eq!(
+            format!("{ours:?}"),
+            format!("{loop_of_parry:?}"),
+            "case {case}"
+        );
+    }
+
     /// The same for a heightfield: boxes and triangles sunk into the wavy
     /// field at random, either side first, every field equal to parry's
     /// loop over the same dispatcher.
@@ -829,22 +827,14 @@ mod tests {
             let ours = AxesFirst.contact(&pose, body, &field, prediction).unwrap();
             let loop_of_parry =
                 details::contact_shape_heightfield(&AxesFirst, &pose, body, &field, prediction);
-            assert_eq!(
-                format!("{ours:?}"),
-                format!("{loop_of_parry:?}"),
-                "case {case}"
-            );
+            same_answer(ours, loop_of_parry, case);
             let inverse = pose.inverse();
             let ours = AxesFirst
                 .contact(&inverse, &field, body, prediction)
                 .unwrap();
             let loop_of_parry =
                 details::contact_heightfield_shape(&AxesFirst, &inverse, &field, body, prediction);
-            assert_eq!(
-                format!("{ours:?}"),
-                format!("{loop_of_parry:?}"),
-                "case {case}"
-            );
+            same_answer(ours, loop_of_parry, case);
             compared += 1;
             overlaps += usize::from(ours.is_some_and(|c| c.dist < 0.0));
         }
@@ -870,11 +860,7 @@ mod tests {
             let loop_of_parry = details::contact_shape_composite_shape(
                 &AxesFirst, &pose, &wall, &cross, prediction,
             );
-            assert_eq!(
-                format!("{ours:?}"),
-                format!("{loop_of_parry:?}"),
-                "case {case}"
-            );
+            same_answer(ours, loop_of_parry, case);
             let ours = AxesFirst
                 .contact(&pose.inverse(), &cross, &wall, prediction)
                 .unwrap();
@@ -885,11 +871,7 @@ mod tests {
                 &wall,
                 prediction,
             );
-            assert_eq!(
-                format!("{ours:?}"),
-                format!("{loop_of_parry:?}"),
-                "case {case}"
-            );
+            same_answer(ours, loop_of_parry, case);
             compared += 1;
             overlaps += usize::from(ours.is_some_and(|c| c.dist < 0.0));
         }
