@@ -60,6 +60,12 @@ enum Solid {
         axes: Matrix3<f64>,
         half: Vector3<f64>,
     },
+    /// A box in its own frame (the first shape): a `Box` at the origin
+    /// with the unit axes, its projections and supports read off the
+    /// direction's coordinates, with the same results bit for bit.
+    LocalBox {
+        half: Vector3<f64>,
+    },
     Triangle([Vector3<f64>; 3]),
 }
 
@@ -79,8 +85,35 @@ impl Solid {
         Some(Solid::Triangle([place(t.a), place(t.b), place(t.c)]))
     }
 
+    /// The first shape, in its own frame: what [`Solid::of`] gives with no
+    /// rotation and no translation, for less (a triangle's zero
+    /// coordinates come out `+0` there, as here).
+    fn local(shape: &dyn Shape) -> Option<Solid> {
+        if let Some(c) = shape.as_cuboid() {
+            return Some(Solid::LocalBox {
+                half: vec_from_glam(c.half_extents),
+            });
+        }
+        let t = shape.as_triangle()?;
+        let place = |v| vec_from_glam(v).map(|x: f64| x + 0.0);
+        Some(Solid::Triangle([place(t.a), place(t.b), place(t.c)]))
+    }
+
+    /// A local box as the `Box` it stands for.
+    fn placed(&self) -> Solid {
+        match *self {
+            Solid::LocalBox { half } => Solid::Box {
+                center: Vector3::zeros(),
+                axes: Matrix3::identity(),
+                half,
+            },
+            other => other,
+        }
+    }
+
     fn is_finite(&self) -> bool {
         match self {
+            Solid::LocalBox { half } => half.iter().all(|x| x.is_finite()),
             Solid::Box { center, axes, half } => center
                 .iter()
                 .chain(axes.iter())
@@ -95,6 +128,7 @@ impl Solid {
     fn faces(&self) -> ([Vector3<f64>; 3], usize) {
         match self {
             Solid::Box { axes, .. } => (columns(axes), 3),
+            Solid::LocalBox { .. } => (columns(&Matrix3::identity()), 3),
             Solid::Triangle([a, b, c]) => {
                 let n = (b - a).cross(&(c - a));
                 let length = n.norm();
@@ -111,6 +145,7 @@ impl Solid {
     fn edges(&self) -> [Vector3<f64>; 3] {
         match self {
             Solid::Box { axes, .. } => columns(axes),
+            Solid::LocalBox { .. } => columns(&Matrix3::identity()),
             Solid::Triangle([a, b, c]) => [b - a, c - b, a - c],
         }
     }
@@ -121,6 +156,15 @@ impl Solid {
             Solid::Box { center, axes, half } => {
                 let reach: f64 = (0..3).map(|i| half[i] * axes.column(i).dot(n).abs()).sum();
                 let at = center.dot(n);
+                (at - reach, at + reach)
+            }
+            Solid::LocalBox { half } => {
+                // A unit axis' dot product with `n` is `n`'s coordinate
+                // (or a zero of either sign, which the absolute value
+                // clears), and the origin's is a zero: computed as the
+                // `Box` computes it, for its sign.
+                let reach: f64 = (0..3).map(|i| half[i] * n[i].abs()).sum();
+                let at = Vector3::<f64>::zeros().dot(n);
                 (at - reach, at + reach)
             }
             Solid::Triangle(v) => {
@@ -145,6 +189,13 @@ impl Solid {
                 }
                 p
             }
+            Solid::LocalBox { half } => Vector3::from_fn(|i, _| {
+                if n[i].abs() > PARALLEL {
+                    half[i] * n[i].signum()
+                } else {
+                    0.0
+                }
+            }),
             Solid::Triangle(v) => {
                 let far = v.iter().map(|p| p.dot(n)).fold(f64::NEG_INFINITY, f64::max);
                 let tied = v
@@ -170,6 +221,10 @@ impl Solid {
                 [middle - along, middle + along]
             }
             Solid::Triangle(v) => [v[k], v[(k + 1) % 3]],
+            // Which way each other axis faces `n` hangs on the sign of a
+            // zero dot product, which the `Box` decides (a contact between
+            // two edges, rare enough to pay for it).
+            Solid::LocalBox { .. } => self.placed().edge(k, n),
         }
     }
 }
@@ -236,10 +291,7 @@ impl Placed {
 
 /// [`contact`] with its second shape placed already.
 pub(crate) fn contact_placed(shape1: &dyn Shape, placed: &Placed, prediction: f64) -> SatAnswer {
-    let (Some(s1), Some(s2)) = (
-        Solid::of(shape1, &Matrix3::identity(), &Vector3::zeros()),
-        placed.solid,
-    ) else {
+    let (Some(s1), Some(s2)) = (Solid::local(shape1), placed.solid) else {
         return SatAnswer::Unknown;
     };
     if !s1.is_finite() {
@@ -474,6 +526,71 @@ mod tests {
             }
         }
         (overlaps, beyond, disagree)
+    }
+
+    /// The first shape in its own frame answers as the same shape placed
+    /// at the origin with no turn, bit for bit: a box's projections,
+    /// supports and edges along directions with zero coordinates of
+    /// either sign among them, and a triangle's corners with zero
+    /// coordinates of either sign.
+    #[test]
+    fn local_solids_are_the_placed_ones() {
+        let bits = |v: &Vector3<f64>| v.map(f64::to_bits);
+        let mut rng = Lcg(5);
+        let (origin, identity) = (Vector3::zeros(), Matrix3::identity());
+        let zero = |x: f64, k: f32| {
+            if k < 0.2 {
+                0.0
+            } else if k < 0.4 {
+                -0.0
+            } else {
+                x
+            }
+        };
+        for case in 0..2000 {
+            let half = rng.vector(1.0).abs() + Vector::splat(0.01);
+            let cube = Cuboid::new(half);
+            let (local, placed) = (
+                Solid::local(&cube).unwrap(),
+                Solid::of(&cube, &identity, &origin).unwrap(),
+            );
+            let raw = vec_from_glam(rng.vector(1.0));
+            let n = Vector3::new(
+                zero(raw.x, rng.next()),
+                zero(raw.y, rng.next()),
+                zero(raw.z, rng.next()),
+            );
+            let (a, b) = (local.project(&n), placed.project(&n));
+            assert_eq!(
+                (a.0.to_bits(), a.1.to_bits()),
+                (b.0.to_bits(), b.1.to_bits())
+            );
+            assert_eq!(
+                bits(&local.support(&n)),
+                bits(&placed.support(&n)),
+                "case {case}"
+            );
+            for k in 0..3 {
+                let (a, b) = (local.edge(k, &n), placed.edge(k, &n));
+                assert_eq!([bits(&a[0]), bits(&a[1])], [bits(&b[0]), bits(&b[1])]);
+            }
+            let corner = |rng: &mut Lcg| {
+                let v = rng.vector(2.0);
+                Vector::new(
+                    zero(v.x as f64, rng.next()) as f32,
+                    zero(v.y as f64, rng.next()) as f32,
+                    zero(v.z as f64, rng.next()) as f32,
+                )
+            };
+            let triangle = Triangle::new(corner(&mut rng), corner(&mut rng), corner(&mut rng));
+            let (Solid::Triangle(a), Solid::Triangle(b)) = (
+                Solid::local(&triangle).unwrap(),
+                Solid::of(&triangle, &identity, &origin).unwrap(),
+            ) else {
+                panic!("case {case}: not triangles");
+            };
+            assert_eq!(a.map(|v| bits(&v)), b.map(|v| bits(&v)), "case {case}");
+        }
     }
 
     #[test]
