@@ -194,17 +194,8 @@ fn composite_contact(
             let polytope = g2_polytope && sat::is_polytope(shape);
             let reach = part_reach(best_dist, settle, polytope, prediction);
             let found = match part_pose {
-                // A mesh's triangle, in the mesh's frame: `g2` is placed
-                // once for all of them.
-                None if polytope => {
-                    let placed = placed.get_or_insert_with(|| sat::Placed::new(pos12, g2));
-                    let axes = sat::contact_placed(shape, placed, f64::from(reach));
-                    dispatcher.polytopes(pos12, shape, g2, reach, axes)
-                }
-                _ => {
-                    let pose = part_pose.map_or(*pos12, |p| p.inv_mul(pos12));
-                    dispatcher.contact(&pose, shape, g2, reach)
-                }
+                None => part_in_frame(dispatcher, pos12, (shape, polytope), g2, reach, &mut placed),
+                Some(p) => dispatcher.contact(&p.inv_mul(pos12), shape, g2, reach),
             };
             if let Ok(Some(mut c)) = found
                 && best.as_ref().is_none_or(|(_, b)| c.dist < b.dist)
@@ -236,7 +227,6 @@ fn heightfield_contact(
     let settle = settle.filter(|s| s.allowed >= 0.0);
     let near = g2.compute_aabb(pos12).loosened(prediction.max(0.0));
     let mut best: Option<Contact> = None;
-    // Every triangle is in the field's frame: `g2` is placed once.
     let polytope = sat::is_polytope(g2);
     let mut placed = None;
     field.map_elements_in_local_aabb(&near, &mut |_, triangle| {
@@ -245,20 +235,36 @@ fn heightfield_contact(
             return;
         }
         let reach = part_reach(best_dist, settle, polytope, prediction);
-        let found = if polytope {
-            let placed = placed.get_or_insert_with(|| sat::Placed::new(pos12, g2));
-            let axes = sat::contact_placed(triangle, placed, f64::from(reach));
-            dispatcher.polytopes(pos12, triangle, g2, reach, axes)
-        } else {
-            dispatcher.contact(pos12, triangle, g2, reach)
-        };
-        if let Ok(Some(c)) = found
+        let part = (triangle as &dyn Shape, polytope);
+        if let Ok(Some(c)) = part_in_frame(dispatcher, pos12, part, g2, reach, &mut placed)
             && best.as_ref().is_none_or(|b| c.dist < b.dist)
         {
             best = Some(c);
         }
     });
     best
+}
+
+/// The contact of a composite's part that lies in the composite's own
+/// frame (a mesh's or heightfield's triangle) with `g2`, placed by `pos12`
+/// in that frame, within `reach`: a box or triangle pair (`polytope`) by
+/// the separating axes, with `g2` placed once for all the parts
+/// (`placed`, made on first need), any other through the dispatcher.
+#[inline]
+fn part_in_frame(
+    dispatcher: &AxesFirst,
+    pos12: &Pose,
+    (part, polytope): (&dyn Shape, bool),
+    g2: &dyn Shape,
+    reach: Real,
+    placed: &mut Option<sat::Placed>,
+) -> Result<Option<Contact>, Unsupported> {
+    if !polytope {
+        return dispatcher.contact(pos12, part, g2, reach);
+    }
+    let placed = placed.get_or_insert_with(|| sat::Placed::new(pos12, g2));
+    let axes = sat::contact_placed(part, placed, f64::from(reach));
+    dispatcher.polytopes(pos12, part, g2, reach, axes)
 }
 
 /// Whether the best part so far, at `best` metres, answers a settling
@@ -268,13 +274,12 @@ fn is_settled(best: Option<Real>, settle: Option<Settle>) -> bool {
 }
 
 /// How far a composite's part is asked, the best part so far at `best`
-/// metres (see [`composite_contact`]): a box or triangle (`polytope`,
-/// with `g2` one too) within an
-/// overlap so far, or for a settling caller once a part is within the
-/// band, within the lesser of that part's distance and minus `allowed`
-/// (either bound shows a part beyond it not deeper than allowed, and both
-/// are at most 0, so no part is then measured by GJK); any other part
-/// within `prediction`.
+/// metres (see [`composite_contact`]): a box or triangle against a box or
+/// triangle (`polytope`) within an overlap so far, or for a settling
+/// caller once a part is within the band, within the lesser of that
+/// part's distance and minus `allowed` (either bound shows a part beyond
+/// it not deeper than allowed, and both are at most 0, so no part is then
+/// measured by GJK); any other part within `prediction`.
 fn part_reach(
     best: Option<Real>,
     settle: Option<Settle>,

@@ -100,7 +100,7 @@ impl Solid {
     }
 
     /// A local box as the `Box` it stands for.
-    fn placed(&self) -> Solid {
+    fn as_box(&self) -> Solid {
         match *self {
             Solid::LocalBox { half } => Solid::Box {
                 center: Vector3::zeros(),
@@ -224,7 +224,7 @@ impl Solid {
             // Which way each other axis faces `n` hangs on the sign of a
             // zero dot product, which the `Box` decides (a contact between
             // two edges, rare enough to pay for it).
-            Solid::LocalBox { .. } => self.placed().edge(k, n),
+            Solid::LocalBox { .. } => self.as_box().edge(k, n),
         }
     }
 }

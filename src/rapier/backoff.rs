@@ -450,7 +450,8 @@ pub(crate) fn stop_before_gap(
     let (s1, m1, s2, m2) = (moving.shape, &moving.motion, target.shape, &target.motion);
     let reach = gap + slop + 1.0e-3;
     // parry cannot tell: as if touching (earlier is always sound).
-    let gap_of = |tau: f64| gap_at(s1, m1, s2, m2, tau, reach).map_or(f64::NEG_INFINITY, |g| g.0);
+    let gap_of =
+        |tau: f64| gap_at(s1, m1, s2, m2, tau, reach, None).map_or(f64::NEG_INFINITY, |g| g.0);
     let near = gap + TOLERANCE * slop;
     let start = gap_of(from);
     if start <= near {

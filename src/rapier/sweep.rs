@@ -279,8 +279,16 @@ fn earliest_piece(
         start_box(moving.shape, &moving.motion).loosened(widest as f32 * 1.01 + 1.0e-6);
     for (j, t) in targets.iter().enumerate() {
         if contacts_only[j] {
-            let start = gap_at(moving.shape, &moving.motion, t.shape, &t.motion, lo, reach)
-                .unwrap_or((reach, None));
+            let start = gap_at(
+                moving.shape,
+                &moving.motion,
+                t.shape,
+                &t.motion,
+                lo,
+                reach,
+                None,
+            )
+            .unwrap_or((reach, None));
             if let Some(found) = touching(j, start, f64::INFINITY, report)? {
                 keep(found);
             }
@@ -307,6 +315,7 @@ fn earliest_piece(
             &t.motion,
             lo,
             band_reach,
+            None,
         ) {
             Some(start) if start.0 <= bands[j] => {
                 if let Some(found) = close(j, start, report)? {
@@ -339,8 +348,15 @@ fn earliest_piece(
         if many.toi.status == RootStatus::InitiallyTouching {
             // The pair touches at the start after all (parry saw it apart).
             alive.remove(many.target);
-            let Some(start) = gap_at(moving.shape, &moving.motion, t.shape, &t.motion, lo, reach)
-            else {
+            let Some(start) = gap_at(
+                moving.shape,
+                &moving.motion,
+                t.shape,
+                &t.motion,
+                lo,
+                reach,
+                None,
+            ) else {
                 continue;
             };
             if let Some(found) = close(j, start, report)? {

@@ -22,22 +22,11 @@ use rapier3d::parry::shape::Shape;
 
 /// Signed gap at step fraction `tau` (negative: penetration depth), with
 /// the contact there; `None` when parry cannot tell. Gaps beyond `reach`
-/// come back as `reach` (and no contact).
+/// come back as `reach` (and no contact). A caller that asks only whether
+/// the gap is deeper than `settle.allowed`, within `settle.band`, or
+/// beyond gets each answer as without it, for less (see
+/// `query::contact_settled`).
 pub(super) fn gap_at(
-    s1: &dyn Shape,
-    m1: &Motion,
-    s2: &dyn Shape,
-    m2: &Motion,
-    tau: f64,
-    reach: f64,
-) -> Option<(f64, Option<Contact>)> {
-    gap_settled(s1, m1, s2, m2, tau, reach, None)
-}
-
-/// [`gap_at`] for a caller that asks only whether the gap is deeper than
-/// `settle.allowed`, within `settle.band`, or beyond (see
-/// `query::contact_settled`): each answer is `gap_at`'s, for less.
-fn gap_settled(
     s1: &dyn Shape,
     m1: &Motion,
     s2: &dyn Shape,
@@ -178,7 +167,7 @@ pub(super) fn touching_pair(
     // Nor does a sample need the deepest part of a mesh once one is
     // within the band: only whether some part is deeper than allowed.
     let settle = Some(Settle { band, allowed });
-    let sample = |tau: f64| gap_settled(s1, m1, s2, m2, tau, reach, settle);
+    let sample = |tau: f64| gap_at(s1, m1, s2, m2, tau, reach, settle);
     let width = hi - lo;
     let mut prev = lo;
     for k in 1..=samples {
@@ -210,7 +199,7 @@ pub(super) fn touching_pair(
                     _ => bad = mid,
                 }
             }
-            let (_, found) = gap_at(s1, m1, s2, m2, ok, witness_reach).unwrap_or((0.0, None));
+            let (_, found) = gap_at(s1, m1, s2, m2, ok, witness_reach, None).unwrap_or((0.0, None));
             let witness = found.map_or_else(
                 || Witness::origins(&m1.pose_at(ok), &m2.pose_at(ok)),
                 |c| Witness::of(&c),
