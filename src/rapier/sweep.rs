@@ -271,6 +271,18 @@ fn earliest_piece(
         }
         touching(j, start, bands[j], report)
     };
+    // The pair's gap at the start, read within `reach`.
+    let start_gap = |t: &ShapeMotion, reach: f64| {
+        gap_at(
+            moving.shape,
+            &moving.motion,
+            t.shape,
+            &t.motion,
+            lo,
+            reach,
+            None,
+        )
+    };
     let mut alive: Vec<usize> = Vec::with_capacity(targets.len());
     // parry's contact costs GJK (and EPA when touching): ask it only for
     // pairs whose boxes at the start come within the band.
@@ -279,16 +291,7 @@ fn earliest_piece(
         start_box(moving.shape, &moving.motion).loosened(widest as f32 * 1.01 + 1.0e-6);
     for (j, t) in targets.iter().enumerate() {
         if contacts_only[j] {
-            let start = gap_at(
-                moving.shape,
-                &moving.motion,
-                t.shape,
-                &t.motion,
-                lo,
-                reach,
-                None,
-            )
-            .unwrap_or((reach, None));
+            let start = start_gap(t, reach).unwrap_or((reach, None));
             if let Some(found) = touching(j, start, f64::INFINITY, report)? {
                 keep(found);
             }
@@ -308,15 +311,7 @@ fn earliest_piece(
         }
         // Only a pair within its band reads its start gap here.
         let band_reach = past_band(bands[j]);
-        match gap_at(
-            moving.shape,
-            &moving.motion,
-            t.shape,
-            &t.motion,
-            lo,
-            band_reach,
-            None,
-        ) {
+        match start_gap(t, band_reach) {
             Some(start) if start.0 <= bands[j] => {
                 if let Some(found) = close(j, start, report)? {
                     keep(found);
@@ -348,15 +343,7 @@ fn earliest_piece(
         if many.toi.status == RootStatus::InitiallyTouching {
             // The pair touches at the start after all (parry saw it apart).
             alive.remove(many.target);
-            let Some(start) = gap_at(
-                moving.shape,
-                &moving.motion,
-                t.shape,
-                &t.motion,
-                lo,
-                reach,
-                None,
-            ) else {
+            let Some(start) = start_gap(t, reach) else {
                 continue;
             };
             if let Some(found) = close(j, start, report)? {
