@@ -11,7 +11,7 @@ use super::candidates::{
 use super::moved::Moved;
 use super::report::CcdReport;
 use super::search;
-use super::touching::{gap_at, past_band, touching_pair};
+use super::touching::{gap_at, never_as_deep, past_band, touching_pair};
 use super::world::{MotionCache, StageWorld, StepMotions};
 use crate::convert::pose_from_iso;
 use crate::enclosure::TimeSpan;
@@ -262,6 +262,9 @@ fn earliest_piece(
     let close = |j: usize, start: (f64, Option<Contact>), report: &mut CcdReport| {
         let t = &targets[j];
         if let Some(depth) = rules.deep_stop(start.0, moving, t) {
+            if never_as_deep(moving, t, &start, depth) {
+                return Ok(None);
+            }
             let toi = stop_when_deep(moving, t, lo, opts.time_range.hi, depth, opts, report)?;
             return Ok(toi.map(|toi| Earliest {
                 toi,
