@@ -265,43 +265,103 @@ pub(crate) fn mesh_points_within(
     n: &Vector3<f64>,
     allowed: f64,
 ) -> bool {
-    let (Some(mesh), Some(support)) = (moving.shape.as_trimesh(), target.shape.as_support_map())
-    else {
+    let Some(start) = MeshOverlap::at_start(moving, target, n) else {
         return false;
     };
-    if mesh.vertices().len() > MAX_CORE_POINTS {
-        return false;
-    }
-    let points: Vec<Vector3<f64>> = mesh.vertices().iter().map(|v| vec_from_glam(*v)).collect();
-    let q = if target.motion.turns() {
-        match core_points(target.shape) {
-            Some(q) => q,
-            None => return false,
-        }
-    } else {
-        vec![Vector3::zeros()]
-    };
-    let (p0, q0) = (moving.motion.pose_at(0.0), target.motion.pose_at(0.0));
-    let reach = points
-        .iter()
-        .map(|v| n.dot(&(p0 * Point3::from(*v)).coords))
-        .fold(f64::NEG_INFINITY, f64::max);
-    let toward = q0.rotation.inverse() * -n;
-    let low = support.local_support_point(glam_from_vec(&toward));
-    let low = n.dot(&(q0 * point_from_glam(low)).coords);
     // The allowed depth is parry's `f32` one (often the start depth
     // itself), good to about a micrometre at the scenes' scale; the
     // overlap here is `f64` arithmetic on the same `f32` data.
-    let scale = p0
-        .translation
-        .vector
-        .amax()
-        .max(q0.translation.vector.amax());
-    let budget = allowed - (reach - low) + 1.0e-6 * (1.0 + scale);
-    budget >= 0.0
-        && moving
-            .motion
-            .points_approach_within(n, &points, &target.motion, &q, budget)
+    let budget = allowed - start.overlap + start.rounding;
+    budget >= 0.0 && start.grows_within(moving, target, n, budget)
+}
+
+/// Whether a small triangle mesh apart from a target with a support map
+/// stays apart over the step along `n` (unit, from the mesh towards the
+/// target): the overlap of their projections on `n`, which starts at what
+/// the mesh's vertices and the target's support give, stays below zero
+/// (by more than the rounding of that start value), so a plane across `n`
+/// separates them all step. See [`mesh_points_within`].
+pub(crate) fn mesh_stays_apart(
+    moving: &ShapeMotion,
+    target: &ShapeMotion,
+    n: &Vector3<f64>,
+) -> bool {
+    let Some(start) = MeshOverlap::at_start(moving, target, n) else {
+        return false;
+    };
+    let budget = -start.overlap - 2.0 * start.rounding;
+    budget >= 0.0 && start.grows_within(moving, target, n, budget)
+}
+
+/// A small moving mesh's overlap with a target along a direction at the
+/// step's start, and the points whose motion bounds its growth.
+struct MeshOverlap {
+    /// The mesh's vertices (its frame) and the target's core points.
+    points: Vec<Vector3<f64>>,
+    target_points: Vec<Vector3<f64>>,
+    /// How far the mesh's farthest vertex along `n` reaches past the
+    /// target's nearest support point, metres (negative: apart).
+    overlap: f64,
+    /// Far more than the `f64` rounding of `overlap`, metres.
+    rounding: f64,
+}
+
+impl MeshOverlap {
+    /// `None` for a mesh of more than [`MAX_CORE_POINTS`] vertices, a
+    /// target without a support map, or a turning one without core points.
+    fn at_start(
+        moving: &ShapeMotion,
+        target: &ShapeMotion,
+        n: &Vector3<f64>,
+    ) -> Option<MeshOverlap> {
+        let mesh = moving.shape.as_trimesh()?;
+        let support = target.shape.as_support_map()?;
+        if mesh.vertices().len() > MAX_CORE_POINTS {
+            return None;
+        }
+        let points: Vec<Vector3<f64>> = mesh.vertices().iter().map(|v| vec_from_glam(*v)).collect();
+        let target_points = if target.motion.turns() {
+            core_points(target.shape)?
+        } else {
+            vec![Vector3::zeros()]
+        };
+        let (p0, q0) = (moving.motion.pose_at(0.0), target.motion.pose_at(0.0));
+        let reach = points
+            .iter()
+            .map(|v| n.dot(&(p0 * Point3::from(*v)).coords))
+            .fold(f64::NEG_INFINITY, f64::max);
+        let toward = q0.rotation.inverse() * -n;
+        let low = support.local_support_point(glam_from_vec(&toward));
+        let low = n.dot(&(q0 * point_from_glam(low)).coords);
+        let scale = p0
+            .translation
+            .vector
+            .amax()
+            .max(q0.translation.vector.amax());
+        Some(MeshOverlap {
+            points,
+            target_points,
+            overlap: reach - low,
+            rounding: 1.0e-6 * (1.0 + scale),
+        })
+    }
+
+    /// Whether the overlap grows by at most `budget` over the step.
+    fn grows_within(
+        &self,
+        moving: &ShapeMotion,
+        target: &ShapeMotion,
+        n: &Vector3<f64>,
+        budget: f64,
+    ) -> bool {
+        moving.motion.points_approach_within(
+            n,
+            &self.points,
+            &target.motion,
+            &self.target_points,
+            budget,
+        )
+    }
 }
 
 /// Most points [`core_points`] gives (a hull with more is left to the
