@@ -266,7 +266,16 @@ fn earliest_piece(
             if never_as_deep(moving, t, &start, depth) {
                 return Ok(None);
             }
-            let toi = stop_when_deep(moving, t, lo, opts.time_range.hi, depth, opts, report)?;
+            let toi = stop_when_deep(
+                moving,
+                t,
+                lo,
+                opts.time_range.hi,
+                depth,
+                false,
+                opts,
+                report,
+            )?;
             return Ok(toi.map(|toi| Earliest {
                 toi,
                 target: j,

@@ -132,7 +132,16 @@ pub(super) fn touching_pair(
     // less). Against a mesh parry's samples are cheap (no EPA), and a
     // search over the mesh for the whole step is not.
     if convex && roundings(moving, target) > allowed + DEEPER {
-        return stop_when_deep(moving, target, lo, hi, allowed + DEEPER, opts, report);
+        return stop_when_deep(
+            moving,
+            target,
+            lo,
+            hi,
+            allowed + DEEPER,
+            false,
+            opts,
+            report,
+        );
     }
     // A mesh or compound moving shape takes the proof after the first
     // sample, not before: its proof searches every part near the target,
@@ -220,7 +229,7 @@ pub(super) fn touching_pair(
             // gets that deep; an unrounded pair `slop` before its true
             // contact (zero skin).
             if let Some(depth) = rules.deep_stop(gap, moving, target) {
-                return stop_when_deep(moving, target, tau, hi, depth, opts, report);
+                return stop_when_deep(moving, target, tau, hi, depth, false, opts, report);
             }
             let rest = QueryOptions {
                 time_range: TimeSpan::new(tau, opts.time_range.hi),
@@ -382,7 +391,7 @@ mod tests {
             if never_as_deep(&moving, &target, &first, depth) {
                 let mut report = CcdReport::default();
                 let opts = QueryOptions::default();
-                let deep = stop_when_deep(&moving, &target, 0.0, 1.0, depth, &opts, &mut report);
+                let deep = stop_when_deep(&moving, &target, 0.0, 1.0, depth, false, &opts, &mut report);
                 prop_assert!(
                     matches!(deep, Ok(None)),
                     "start gap {}: the search finds it {} deep at {:?}",
