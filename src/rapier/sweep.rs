@@ -343,18 +343,8 @@ fn earliest_piece(
         if !moving_box.intersects(&target_box) {
             // Farther apart at the start than their points can move
             // relative to each other: they cannot meet (two bodies flying
-            // side by side, a body far from a fixed one). Or, for a turning
-            // shape (whose travel counts its whole reach turning), not
-            // closing along the axis the boxes are farthest apart along (a
-            // blade spinning beside a wall). A ball's or a straight
-            // flyer's travel says as much, and the test would only cost.
-            if box_gap(&moving_box, &target_box) > travel
-                || (moving.motion.turns()
-                    && moving.shape.as_ball().is_none()
-                    && moving.shape.is_convex()
-                    && t.shape.is_convex()
-                    && apart_along(moving, t, box_axis(&moving_box, &target_box)))
-            {
+            // side by side, a body far from a fixed one).
+            if box_gap(&moving_box, &target_box) > travel {
                 continue;
             }
             alive.push(j);
@@ -462,24 +452,6 @@ fn apart_along(moving: &ShapeMotion, target: &ShapeMotion, n: Vector) -> bool {
     budget > 0.0
         && (pair_approach_along(s1, m1, s2, m2, &n) < budget
             || pair_points_approach_within(moving, target, &n, budget))
-}
-
-/// The world axis, pointing from `a` towards `b`, along which boxes `a`
-/// and `b` are farthest apart.
-fn box_axis(a: &Aabb, b: &Aabb) -> Vector {
-    let ahead = b.mins - a.maxs;
-    let behind = a.mins - b.maxs;
-    let gaps = ahead.max(behind);
-    let i = if gaps.x >= gaps.y && gaps.x >= gaps.z {
-        0
-    } else if gaps.y >= gaps.z {
-        1
-    } else {
-        2
-    };
-    let mut n = Vector::ZERO;
-    n[i] = if ahead[i] >= behind[i] { 1.0 } else { -1.0 };
-    n
 }
 
 /// A lower bound of the distance between anything inside two boxes,
@@ -826,9 +798,8 @@ mod tests {
         );
     }
 
-    /// Where `apart_along` answers (by parry's start normal, or the axis
-    /// the start boxes are farthest apart along, as the sweep asks it),
-    /// the sound search finds no contact over the whole step:
+    /// Where `apart_along` answers (by parry's start normal, as the sweep
+    /// asks it), the sound search finds no contact over the whole step:
     /// 3,000 pairs of boxes, balls and capsules against a fixed box, a fixed
     /// triangle and a moving box, apart at the start and moving and
     /// spinning every way. The bound answers for a good share of them, or
@@ -899,16 +870,7 @@ mod tests {
                 continue;
             }
             apart += 1;
-            // The direction the sweep takes for boxes apart at the start:
-            // the axis they are farthest apart along.
-            let start_box =
-                |s: &dyn Shape, m: &Motion| s.compute_aabb(&pose_from_iso(&m.pose_at(0.0)));
-            let axis = box_axis(
-                &start_box(mover, &moving.motion),
-                &start_box(target.shape, &target.motion),
-            );
-            if apart_along(&moving, &target, contact.normal1) || apart_along(&moving, &target, axis)
-            {
+            if apart_along(&moving, &target, contact.normal1) {
                 answered += 1;
                 let mut report = CcdReport::default();
                 let found = search::one(
