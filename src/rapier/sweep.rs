@@ -300,21 +300,24 @@ fn earliest_piece(
     // start beyond its band that provably stays apart needs no search
     // (most searches that find nothing): the direction of parry's contact
     // at the start (`known`, else read as far as the pair's relative
-    // `travel`: farther than that, it is apart), along which the pair
-    // cannot close its start separation (`apart_along`, or from the mesh's
+    // travel: farther than that, it is apart), along which the pair cannot
+    // close its start separation (`apart_along`, or from the mesh's
     // vertices, `mesh_stays_apart`).
-    let stays_apart = |t: &ShapeMotion, travel: f64, known: Option<&Contact>| {
+    let stays_apart = |t: &ShapeMotion, known: Option<&Contact>| {
         let convex = moving.shape.is_convex() && t.shape.is_convex();
         if !convex && (moving.shape.as_trimesh().is_none() || !t.shape.is_convex()) {
             return false;
         }
         let normal = match known {
             Some(c) => c.normal1,
-            None => match start_gap(t, travel * (1.0 + 1.0e-3) + 1.0e-4) {
-                Some((_, None)) => return true,
-                Some((_, Some(c))) => c.normal1,
-                None => return false,
-            },
+            None => {
+                let travel = pair_relative_travel(moving.shape, &moving.motion, t.shape, &t.motion);
+                match start_gap(t, travel * (1.0 + 1.0e-3) + 1.0e-4) {
+                    Some((_, None)) => return true,
+                    Some((_, Some(c))) => c.normal1,
+                    None => return false,
+                }
+            }
         };
         if convex {
             apart_along(moving, t, normal)
@@ -339,12 +342,12 @@ fn earliest_piece(
             continue;
         }
         let target_box = start_box(t.shape, &t.motion);
-        let travel = pair_relative_travel(moving.shape, &moving.motion, t.shape, &t.motion);
         if !moving_box.intersects(&target_box) {
             // Farther apart at the start than their points can move
             // relative to each other: they cannot meet (two bodies flying
             // side by side, a body far from a fixed one).
-            if box_gap(&moving_box, &target_box) > travel {
+            let apart = box_gap(&moving_box, &target_box);
+            if apart > pair_relative_travel(moving.shape, &moving.motion, t.shape, &t.motion) {
                 continue;
             }
             alive.push(j);
@@ -358,7 +361,7 @@ fn earliest_piece(
                     keep(found);
                 }
             }
-            Some((_, contact)) if stays_apart(t, travel, contact.as_ref()) => {}
+            Some((_, contact)) if stays_apart(t, contact.as_ref()) => {}
             _ => alive.push(j),
         }
     }
