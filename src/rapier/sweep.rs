@@ -296,14 +296,21 @@ fn earliest_piece(
             None,
         )
     };
+    let mut alive: Vec<usize> = Vec::with_capacity(targets.len());
+    // parry's contact costs GJK (and EPA when touching): ask it only for
+    // pairs whose boxes at the start come within the band.
+    let start_box = |s: &dyn Shape, m: &Motion| s.compute_aabb(&pose_from_iso(&m.pose_at(lo)));
+    let moving_box =
+        start_box(moving.shape, &moving.motion).loosened(widest as f32 * 1.01 + 1.0e-6);
     // A convex pair (or a small mesh against a convex target) apart at the
     // start beyond its band that provably stays apart needs no search
     // (most searches that find nothing): the direction of parry's contact
     // at the start (`known`, else read as far as the pair's relative
-    // travel: farther than that, it is apart), along which the pair cannot
-    // close its start separation (`apart_along`, or from the mesh's
+    // travel, padded for `f32` poses and boxes (`box_rounding` of the two
+    // start boxes): farther than that, it is apart), along which the pair
+    // cannot close its start separation (`apart_along`, or from the mesh's
     // vertices, `mesh_stays_apart`).
-    let stays_apart = |t: &ShapeMotion, known: Option<&Contact>| {
+    let stays_apart = |t: &ShapeMotion, target_box: &Aabb, known: Option<&Contact>| {
         let convex = moving.shape.is_convex() && t.shape.is_convex();
         if !convex && (moving.shape.as_trimesh().is_none() || !t.shape.is_convex()) {
             return false;
@@ -312,7 +319,8 @@ fn earliest_piece(
             Some(c) => c.normal1,
             None => {
                 let travel = pair_relative_travel(moving.shape, &moving.motion, t.shape, &t.motion);
-                match start_gap(t, travel * (1.0 + 1.0e-3) + 1.0e-4) {
+                let far = travel * (1.0 + 1.0e-3) + 1.0e-4 + box_rounding(&moving_box, target_box);
+                match start_gap(t, far) {
                     Some((_, None)) => return true,
                     Some((_, Some(c))) => c.normal1,
                     None => return false,
@@ -327,12 +335,6 @@ fn earliest_piece(
                 .is_some_and(|n| mesh_stays_apart(moving, t, &vec_from_glam(n)))
         }
     };
-    let mut alive: Vec<usize> = Vec::with_capacity(targets.len());
-    // parry's contact costs GJK (and EPA when touching): ask it only for
-    // pairs whose boxes at the start come within the band.
-    let start_box = |s: &dyn Shape, m: &Motion| s.compute_aabb(&pose_from_iso(&m.pose_at(lo)));
-    let moving_box =
-        start_box(moving.shape, &moving.motion).loosened(widest as f32 * 1.01 + 1.0e-6);
     for (j, t) in targets.iter().enumerate() {
         if contacts_only[j] {
             let start = start_gap(t, reach).unwrap_or((reach, None));
@@ -361,7 +363,7 @@ fn earliest_piece(
                     keep(found);
                 }
             }
-            Some((_, contact)) if stays_apart(t, contact.as_ref()) => {}
+            Some((_, contact)) if stays_apart(t, &target_box, contact.as_ref()) => {}
             _ => alive.push(j),
         }
     }
@@ -463,13 +465,19 @@ fn apart_along(moving: &ShapeMotion, target: &ShapeMotion, n: Vector) -> bool {
 fn box_gap(a: &Aabb, b: &Aabb) -> f64 {
     let below = (b.mins - a.maxs).max(Vector::ZERO);
     let above = (a.mins - b.maxs).max(Vector::ZERO);
+    ((below + above).length() as f64 - box_rounding(a, b)).max(0.0)
+}
+
+/// How far `f32` boxes `a` and `b`, and parry's distances between shapes
+/// at poses of that size, may be off, metres: a few parts in 10⁷ of the
+/// coordinates, padded.
+fn box_rounding(a: &Aabb, b: &Aabb) -> f64 {
     let scale = a
         .mins
         .abs()
         .max(a.maxs.abs())
         .max(b.mins.abs().max(b.maxs.abs()));
-    let rounding = 1.0e-6 * scale.max_element() as f64 + 1.0e-6;
-    ((below + above).length() as f64 - rounding).max(0.0)
+    1.0e-6 * scale.max_element() as f64 + 1.0e-6
 }
 
 /// When a sensor pair first touches before `until` (a fraction of the
