@@ -306,11 +306,12 @@ fn earliest_piece(
     // start beyond its band that provably stays apart needs no search
     // (most searches that find nothing): the direction of parry's contact
     // at the start (`known`, else read as far as the pair's relative
-    // travel, padded for `f32` poses and boxes (`box_rounding` of the two
-    // start boxes): farther than that, it is apart), along which the pair
-    // cannot close its start separation (`apart_along`, or from the mesh's
-    // vertices, `mesh_stays_apart`).
-    let stays_apart = |t: &ShapeMotion, target_box: &Aabb, known: Option<&Contact>| {
+    // travel, padded for `f32` poses by the `box_rounding` of the moving
+    // shape's box, near which any closer point of the target lies (a
+    // half-space's own box is unbounded): farther than that, it is apart),
+    // along which the pair cannot close its start separation
+    // (`apart_along`, or from the mesh's vertices, `mesh_stays_apart`).
+    let stays_apart = |t: &ShapeMotion, known: Option<&Contact>| {
         let convex = moving.shape.is_convex() && t.shape.is_convex();
         if !convex && (moving.shape.as_trimesh().is_none() || !t.shape.is_convex()) {
             return false;
@@ -319,7 +320,7 @@ fn earliest_piece(
             Some(c) => c.normal1,
             None => {
                 let travel = pair_relative_travel(moving.shape, &moving.motion, t.shape, &t.motion);
-                let far = travel * (1.0 + 1.0e-3) + 1.0e-4 + box_rounding(&moving_box, target_box);
+                let far = travel * (1.0 + 1.0e-3) + 1.0e-4 + box_rounding(&moving_box, &moving_box);
                 match start_gap(t, far) {
                     Some((_, None)) => return true,
                     Some((_, Some(c))) => c.normal1,
@@ -363,7 +364,7 @@ fn earliest_piece(
                     keep(found);
                 }
             }
-            Some((_, contact)) if stays_apart(t, &target_box, contact.as_ref()) => {}
+            Some((_, contact)) if stays_apart(t, contact.as_ref()) => {}
             _ => alive.push(j),
         }
     }
