@@ -306,9 +306,10 @@ fn earliest_piece(
     // start beyond its band that provably stays apart needs no search
     // (most searches that find nothing): the direction of parry's contact
     // at the start (`known`, else read as far as the pair's relative
-    // travel, padded for `f32` poses by the `box_rounding` of the moving
-    // shape's box, near which any closer point of the target lies (a
-    // half-space's own box is unbounded): farther than that, it is apart),
+    // travel, padded for `f32` poses by a few parts in 10⁷ of the moving
+    // shape's box, near which any closer point of the target lies, and of
+    // the target's origin (not its box: a half-space's is unbounded):
+    // farther than that, it is apart),
     // along which the pair cannot close its start separation
     // (`apart_along`, or from the mesh's vertices, `mesh_stays_apart`).
     let stays_apart = |t: &ShapeMotion, known: Option<&Contact>| {
@@ -320,7 +321,9 @@ fn earliest_piece(
             Some(c) => c.normal1,
             None => {
                 let travel = pair_relative_travel(moving.shape, &moving.motion, t.shape, &t.motion);
-                let far = travel * (1.0 + 1.0e-3) + 1.0e-4 + box_rounding(&moving_box, &moving_box);
+                let origin = t.motion.pose_at(lo).translation.vector.amax() as f32;
+                let origin = Aabb::new(Vector::splat(-origin), Vector::splat(origin));
+                let far = travel * (1.0 + 1.0e-3) + 1.0e-4 + box_rounding(&moving_box, &origin);
                 match start_gap(t, far) {
                     Some((_, None)) => return true,
                     Some((_, Some(c))) => c.normal1,
