@@ -808,6 +808,25 @@ mod tests {
         );
     }
 
+    /// Our contact of `a` with `b` at `pose`, and of `b` with `a` at its
+    /// inverse, each the same as parry's loop over the same dispatcher
+    /// (`forward`, `backward`, given the pose); returns the second.
+    fn same_both_ways(
+        case: usize,
+        pose: &Pose,
+        (a, b): (&dyn Shape, &dyn Shape),
+        prediction: f32,
+        forward: impl Fn(&Pose) -> Option<Contact>,
+        backward: impl Fn(&Pose) -> Option<Contact>,
+    ) -> Option<Contact> {
+        let ours = AxesFirst.contact(pose, a, b, prediction).unwrap();
+        same_answer(ours, forward(pose), case);
+        let inverse = pose.inverse();
+        let ours = AxesFirst.contact(&inverse, b, a, prediction).unwrap();
+        same_answer(ours, backward(&inverse), case);
+        ours
+    }
+
     /// The same for a heightfield: boxes and triangles sunk into the wavy
     /// field at random, either side first, every field equal to parry's
     /// loop over the same dispatcher.
@@ -829,17 +848,14 @@ mod tests {
                 Vector::new(next() - 0.5, next() - 0.5, next() - 0.5).normalize_or(Vector::Y);
             let pose = Pose::from_parts(at, Rotation::from_axis_angle(axis, 6.0 * next()));
             let prediction = 0.01 * next();
-            let ours = AxesFirst.contact(&pose, body, &field, prediction).unwrap();
-            let loop_of_parry =
-                details::contact_shape_heightfield(&AxesFirst, &pose, body, &field, prediction);
-            same_answer(ours, loop_of_parry, case);
-            let inverse = pose.inverse();
-            let ours = AxesFirst
-                .contact(&inverse, &field, body, prediction)
-                .unwrap();
-            let loop_of_parry =
-                details::contact_heightfield_shape(&AxesFirst, &inverse, &field, body, prediction);
-            same_answer(ours, loop_of_parry, case);
+            let ours = same_both_ways(
+                case,
+                &pose,
+                (body, &field),
+                prediction,
+                |p| details::contact_shape_heightfield(&AxesFirst, p, body, &field, prediction),
+                |p| details::contact_heightfield_shape(&AxesFirst, p, &field, body, prediction),
+            );
             compared += 1;
             overlaps += usize::from(ours.is_some_and(|c| c.dist < 0.0));
         }
@@ -861,22 +877,18 @@ mod tests {
                 Vector::new(next() - 0.5, next() - 0.5, next() - 0.5).normalize_or(Vector::Z);
             let pose = Pose::from_parts(at, Rotation::from_axis_angle(axis, 6.0 * next()));
             let prediction = 0.01 * next();
-            let ours = AxesFirst.contact(&pose, &wall, &cross, prediction).unwrap();
-            let loop_of_parry = details::contact_shape_composite_shape(
-                &AxesFirst, &pose, &wall, &cross, prediction,
-            );
-            same_answer(ours, loop_of_parry, case);
-            let ours = AxesFirst
-                .contact(&pose.inverse(), &cross, &wall, prediction)
-                .unwrap();
-            let loop_of_parry = details::contact_composite_shape_shape(
-                &AxesFirst,
-                &pose.inverse(),
-                &cross,
-                &wall,
+            let ours = same_both_ways(
+                case,
+                &pose,
+                (&wall, &cross),
                 prediction,
+                |p| {
+                    details::contact_shape_composite_shape(&AxesFirst, p, &wall, &cross, prediction)
+                },
+                |p| {
+                    details::contact_composite_shape_shape(&AxesFirst, p, &cross, &wall, prediction)
+                },
             );
-            same_answer(ours, loop_of_parry, case);
             compared += 1;
             overlaps += usize::from(ours.is_some_and(|c| c.dist < 0.0));
         }

@@ -209,7 +209,7 @@ pub(crate) fn pair_relative_travel(
 /// point `p` of one shape and `q` of the other, metres: how much deeper
 /// the pair can get along `n` (unit, from the first shape towards the
 /// second). See [`Motion::relative_approach_along`].
-pub(crate) fn pair_approach_along(
+fn pair_approach_along(
     s1: &dyn Shape,
     m1: &Motion,
     s2: &dyn Shape,
@@ -225,7 +225,7 @@ pub(crate) fn pair_approach_along(
 /// tighter than [`pair_approach_along`] for a turning ball, capsule, box,
 /// triangle or small hull, whose farthest points do not all turn towards
 /// `n` at once. `false` for a turning shape of another kind.
-pub(crate) fn pair_points_approach_within(
+fn pair_points_approach_within(
     moving: &ShapeMotion,
     target: &ShapeMotion,
     n: &Vector3<f64>,
@@ -245,6 +245,22 @@ pub(crate) fn pair_points_approach_within(
     moving
         .motion
         .points_approach_within(n, &p, &target.motion, &q, budget)
+}
+
+/// Whether the pair gets at most `budget` (metres) deeper along `n` (unit,
+/// from the moving shape towards the target) over the step: by the chord
+/// bound ([`pair_approach_along`]), else point by point
+/// ([`pair_points_approach_within`]: a ball, capsule or box that spins as
+/// it bounces off or slides along the target).
+pub(crate) fn pair_approaches_within(
+    moving: &ShapeMotion,
+    target: &ShapeMotion,
+    n: &Vector3<f64>,
+    budget: f64,
+) -> bool {
+    let (s1, m1, s2, m2) = (moving.shape, &moving.motion, target.shape, &target.motion);
+    pair_approach_along(s1, m1, s2, m2, n) <= budget
+        || pair_points_approach_within(moving, target, n, budget)
 }
 
 /// Whether a triangle mesh touching a convex target at the start (not a

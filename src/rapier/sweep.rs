@@ -2,8 +2,8 @@
 //! crosses before it ([`earliest`], [`first_crossing`]).
 
 use super::backoff::{
-    HandBack, Stop, mesh_stays_apart, pair_approach_along, pair_points_approach_within,
-    pair_relative_travel, pair_travel, stop_after_contact, stop_when_deep,
+    HandBack, Stop, mesh_stays_apart, pair_approaches_within, pair_relative_travel, pair_travel,
+    stop_after_contact, stop_when_deep,
 };
 use super::candidates::{
     Candidate, FEW_PIECES, Interaction, MAX_PIECES, MeshPiece, gather, interaction, is_moving,
@@ -432,8 +432,8 @@ fn earliest_piece(
 /// along the direction `n` (from `moving` towards `target`): their
 /// projections on `n` are apart at the step's start by `sep` (from their
 /// support points, less the `f32` rounding of those), more than the pair
-/// can approach along `n` from there ([`pair_approach_along`], then point
-/// by point, [`pair_points_approach_within`]; both bound the growth from
+/// can approach along `n` from there ([`pair_approaches_within`]: its
+/// bounds, the chord one and point by point, both bound the growth from
 /// the step's start, so the separation is taken there, whatever part of
 /// the step is searched). A plane across `n` then separates them at every
 /// time: a body leaving a wall it bounced off, a box sliding past a
@@ -456,11 +456,7 @@ fn apart_along(moving: &ShapeMotion, target: &ShapeMotion, n: Vector) -> bool {
     // A few ulps of the points' coordinates, padded.
     let rounding = 1.0e-6 * a.abs().max(b.abs()).max_element() as f64 + 1.0e-7;
     let budget = sep - 2.0 * rounding;
-    let n = vec_from_glam(n);
-    let (s1, m1, s2, m2) = (moving.shape, &moving.motion, target.shape, &target.motion);
-    budget > 0.0
-        && (pair_approach_along(s1, m1, s2, m2, &n) < budget
-            || pair_points_approach_within(moving, target, &n, budget))
+    budget > 0.0 && pair_approaches_within(moving, target, &vec_from_glam(n), budget)
 }
 
 /// A lower bound of the distance between anything inside two boxes,

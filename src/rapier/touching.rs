@@ -4,9 +4,8 @@
 //! can be, sampled with parry's contact otherwise (see [`touching_pair`]).
 
 use super::backoff::{
-    BACKOFF, HandBack, back_off, mesh_points_within, pair_approach_along,
-    pair_points_approach_within, pair_relative_travel, pair_travel, roundings, stop_before_gap,
-    stop_when_deep,
+    BACKOFF, HandBack, back_off, mesh_points_within, pair_approaches_within, pair_relative_travel,
+    pair_travel, roundings, stop_before_gap, stop_when_deep,
 };
 use super::report::CcdReport;
 use super::search;
@@ -108,13 +107,7 @@ pub(super) fn touching_pair(
         // along it. A body sliding or resting on it, or bouncing off it,
         // is done here, without a query.
         let normal = vec_from_glam(c.normal1).normalize();
-        let budget = allowed + gap0;
-        if pair_approach_along(s1, m1, s2, m2, &normal) <= budget {
-            return Ok(None);
-        }
-        // The same, point by point: a ball, capsule or box that spins as
-        // it bounces off or slides along the target.
-        if pair_points_approach_within(moving, target, &normal, budget) {
+        if pair_approaches_within(moving, target, &normal, allowed + gap0) {
             return Ok(None);
         }
         // A small mesh, from its vertices (its start overlap along the
@@ -290,10 +283,7 @@ pub(super) fn never_as_deep(
     };
     let scale = c.point1.abs().max(c.point2.abs()).max_element() as f64;
     let budget = depth + gap0 - (1.0e-5 + 1.0e-6 * scale);
-    let (s1, m1, s2, m2) = (moving.shape, &moving.motion, target.shape, &target.motion);
-    budget > 0.0
-        && (pair_approach_along(s1, m1, s2, m2, &normal) <= budget
-            || pair_points_approach_within(moving, target, &normal, budget))
+    budget > 0.0 && pair_approaches_within(moving, target, &normal, budget)
 }
 
 /// Cheap proof that a touching pair never gets deeper than `allowed`:
