@@ -18,7 +18,7 @@
 //! | ball–segment | end planes + adaptive direction | `ball_segment.rs` |
 //! | triangle–triangle | face normals, edge crosses, adaptive | `triangle_triangle.rs` |
 //! | half-space–any convex shape | plane distance minus the support reach (exact) | `halfspace.rs` |
-//! | every other pair (cuboid–cuboid with a skin or a border included) of ball, cuboid, capsule, segment, triangle, convex polyhedron, cylinder, cone and their round variants | adaptive separating axes: the closest-points direction at the node's middle (closed form for points, segments and boxes, parry's contact otherwise), fixed in the world, in `a`'s and in `b`'s frame | `support_map.rs` |
+//! | every other pair (cuboid–cuboid with a skin or a border included) of ball, cuboid, capsule, segment, triangle, convex polyhedron, cylinder, cone and their round variants | adaptive separating axes: the closest-points direction at the node's middle (closed form for points, segments and boxes, and a cylinder against a box beside its axis; parry's contact otherwise), fixed in the world, in `a`'s and in `b`'s frame | `support_map.rs` |
 //! | vertex–face, edge–edge (linear vertices) | primitive axes | `primitives.rs` |
 //! | shape/mesh–composite (TriMesh, HeightField, Polyline, Compound) | bounding gap, expanded through the BVH | `composite.rs` |
 //!

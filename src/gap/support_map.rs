@@ -10,8 +10,9 @@
 //!
 //! On each node the direction comes from the shapes' closest points at the
 //! exact poses of the node's middle time (in closed form when both cores
-//! are points, segments or boxes: a capsule pair needs no GJK; parry's
-//! contact query otherwise, and on a node narrower than 1e-3 of the step
+//! are points, segments or boxes, a capsule pair needing no GJK, and for a
+//! cylinder and a box whose closest points lie beside the cylinder's axis;
+//! parry's contact query otherwise, and on a node narrower than 1e-3 of the step
 //! a pair with a curved shape first asks GJK in `f64` over our own support
 //! points, whose normal is precise where parry's `f32` one is not, near a
 //! graze): the closest-points normal when
@@ -559,12 +560,13 @@ impl SupportMap {
 }
 
 /// The closest points of two cores with a closed form (points, segments,
-/// boxes) as a unit direction from `a` towards `b`, in `a`'s frame (`rel`:
-/// `b`'s pose in `a`'s frame), in plain `f64` with no GJK: the direction a
-/// capsule pair asks for on every node. Any direction gives a sound axis;
-/// this one is parry's closest-points normal up to rounding. `None` for
-/// other cores, and when the cores (nearly) meet: parry's penetration
-/// normal is the better hint then.
+/// boxes; a cylinder and a box, see [`cylinder_box`]) as a unit direction
+/// from `a` towards `b`, in `a`'s frame (`rel`: `b`'s pose in `a`'s
+/// frame), in plain `f64` with no GJK: the direction a capsule pair asks
+/// for on every node. Any direction gives a sound axis; this one is
+/// parry's closest-points normal up to rounding. `None` for other cores,
+/// and when the cores (nearly) meet: parry's penetration normal is the
+/// better hint then.
 fn core_direction(a: &Core, b: &Core, rel: &Isometry3<f64>) -> Option<Vector3<f64>> {
     let segment = |c: &Core| match c {
         Core::Point => Some([Vector3::zeros(); 2]),
@@ -591,17 +593,53 @@ fn core_direction(a: &Core, b: &Core, rel: &Isometry3<f64>) -> Option<Vector3<f6
             let (p, q) = segment_box(&sb, half);
             p - q
         }
+        (None, None, Core::Cylinder { half_height, .. }, Core::Cuboid(half)) => {
+            // In the box's frame, then back.
+            rel.rotation * cylinder_box(*half_height, &rel.inverse(), half)?
+        }
+        (None, None, Core::Cuboid(half), Core::Cylinder { half_height, .. }) => {
+            -cylinder_box(*half_height, rel, half)?
+        }
         _ => return None,
     };
     from_a_to_b.try_normalize(1.0e-9)
 }
 
+/// The closest-points direction of a cylinder of `half_height` at `pose`
+/// (its frame in the box's) and the box of half-extents `half`, in the
+/// box's frame from the cylinder towards the box, where it has a closed
+/// form: when the box's point nearest the cylinder's axis lies beside the
+/// axis, not past an end. The cylinder is a capsule's middle part there,
+/// so its closest points (or, overlapping, the axis's approach to the box)
+/// are the capsule's: from the axis's closest point to the box's. `None`
+/// otherwise: past an end they are on a cap or its rim, found by GJK (a
+/// closed-form guess there, from the cap's point nearest the box's, could
+/// be far off against a large box and left near misses unproved).
+fn cylinder_box(
+    half_height: f64,
+    pose: &Isometry3<f64>,
+    half: &Vector3<f64>,
+) -> Option<Vector3<f64>> {
+    let axis = [
+        Vector3::new(0.0, -half_height, 0.0),
+        Vector3::new(0.0, half_height, 0.0),
+    ]
+    .map(|p| (pose * nalgebra::Point3::from(p)).coords);
+    let (p, q) = segment_box(&axis, half);
+    let along = axis[1] - axis[0];
+    let s = (p - axis[0]).dot(&along) / along.norm_squared();
+    (s > 1.0e-9 && s < 1.0 - 1.0e-9).then_some(q - p)
+}
+
 /// Whether [`core_direction`] has a closed form for these cores (it may
-/// still decline a pair whose cores meet).
+/// still decline a pair whose cores meet, or a cylinder seen past an end).
 fn has_closed_form(a: &Core, b: &Core) -> bool {
     let segment = |c: &Core| matches!(c, Core::Point | Core::Segment(_));
     let cuboid = |c: &Core| matches!(c, Core::Cuboid(_));
-    segment(a) && (segment(b) || cuboid(b)) || cuboid(a) && segment(b)
+    let cylinder = |c: &Core| matches!(c, Core::Cylinder { .. });
+    segment(a) && (segment(b) || cuboid(b))
+        || cuboid(a) && (segment(b) || cylinder(b))
+        || cylinder(a) && cuboid(b)
 }
 
 /// The closest points of segments `a` and `b` (on `a`, on `b`): the
