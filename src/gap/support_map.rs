@@ -816,22 +816,28 @@ mod tests {
         assert!(apart.iter().any(|x| x.range().lo > 0.009), "{apart:?}");
     }
 
-    /// Where `core_direction` answers for a cylinder and a box (the box's
-    /// point nearest the cylinder's axis lies beside it), its direction is
-    /// the closest-points normal: parry3d-f64's contact normal agrees to
-    /// 1e-6 on 3,000 random poses of a cylinder apart from a box, either
-    /// order (688 of the 2,694 apart answered). (A cylinder past its end is left to GJK: answering there
-    /// with the capsule's direction fails this at once.)
-    #[test]
-    fn a_cylinder_beside_a_box_takes_its_closest_points_normal() {
-        use parry3d_f64::shape::{Cuboid as Cuboid64, Cylinder as Cylinder64, Shape as Shape64};
-        let mut seed = 11u64;
-        let mut next = || {
+    /// Seeded numbers uniform in [-1, 1).
+    fn numbers(seed: u64) -> impl FnMut() -> f64 {
+        let mut seed = seed;
+        move || {
             seed = seed
                 .wrapping_mul(6364136223846793005)
                 .wrapping_add(1442695040888963407);
             (seed >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
-        };
+        }
+    }
+
+    /// Where `core_direction` answers for a cylinder and a box (the box's
+    /// point nearest the cylinder's axis lies beside it), its direction is
+    /// the closest-points normal: parry3d-f64's contact normal agrees to
+    /// 1e-6 on 3,000 random poses of a cylinder apart from a box, either
+    /// order (688 of the 2,694 apart answered). (A cylinder past its end
+    /// is left to GJK: answering there with the capsule's direction fails
+    /// this at once.)
+    #[test]
+    fn a_cylinder_beside_a_box_takes_its_closest_points_normal() {
+        use parry3d_f64::shape::{Cuboid as Cuboid64, Cylinder as Cylinder64, Shape as Shape64};
+        let mut next = numbers(11);
         let (h, r, half) = (0.5, 0.2, Vector3::new(0.6, 0.3, 0.9));
         let cylinder = Core::Cylinder {
             half_height: h,
@@ -887,13 +893,8 @@ mod tests {
         let half = Vector3::new(0.5, 0.2, 1.0);
         let dist =
             |p: &Vector3<f64>| Vector3::from_fn(|i, _| (p[i].abs() - half[i]).max(0.0)).norm();
-        let mut seed = 7u64;
-        let mut next = || {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (seed >> 11) as f64 / (1u64 << 53) as f64 * 4.0 - 2.0
-        };
+        let mut uniform = numbers(7);
+        let mut next = || 2.0 * uniform();
         let mut segments = vec![
             [Vector3::new(-3.0, 0.3, 0.0), Vector3::new(3.0, 0.3001, 0.0)],
             [Vector3::new(0.6, 0.25, -2.0), Vector3::new(0.61, 0.26, 2.0)],
