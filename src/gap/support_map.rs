@@ -457,7 +457,9 @@ impl SupportMap {
         // the parent's or the sibling's, a nearby time): when it proves the
         // pair apart here, no closest-points query is needed.
         // (Only where that query is parry's: the closed form is cheaper
-        // than the extra axis.)
+        // than the extra axis. A cylinder against a box skips it past its
+        // ends too: its nodes mostly straddle the contact, where the try
+        // failed 94 % of the time, each failure costing an axis.)
         if axes & 1 != 0
             && !self.closed_form
             && let Some(last) = self.last.get()
