@@ -48,6 +48,14 @@ pub(crate) fn angle_short(start: &Pose, end: &Pose) -> f64 {
     2.0 * (dq.xyz().length() as f64).atan2(dq.w.abs() as f64)
 }
 
+/// `|sin(θ/2)|` of the turn from `start` to `end` (`θ` its shortest
+/// angle), with no atan2: `π` times it bounds `θ`, and twice it is the
+/// chord a unit arm sweeps.
+pub(crate) fn half_angle_sine(start: &Pose, end: &Pose) -> f64 {
+    let dq = end.rotation * start.rotation.inverse();
+    dq.xyz().length() as f64
+}
+
 /// Bound on how far any point of a body moves, metres: its centre of
 /// mass's `shift` plus the chord of its farthest point (`extent` from the
 /// centre) turned by `angle` radians (at most two extents), padded for

@@ -14,7 +14,7 @@
 //! so a step with no fast body leaves rapier's state untouched.
 
 use super::config::CcdConfig;
-use super::moved::{Moved, Start, angle_bound, angle_short, travel_bound};
+use super::moved::{Moved, Start, angle_bound, angle_short, half_angle_sine, travel_bound};
 use super::report::{CcdReport, SkipReason};
 use super::turns::turn_hint;
 use rapier3d::parry::shape::{Shape, TypedShape};
@@ -198,8 +198,7 @@ fn tunnels(
     // Cheap upper bound of the exact measure below, padded for rounding.
     // `sine` is |sin(angle/2)|: the centre of mass moves by the origin's
     // shift plus at most its chord, `2·sine·|com|` (no pose transforms).
-    let dq = end.rotation * start.rotation.inverse();
-    let sine = dq.xyz().length() as f64;
+    let sine = half_angle_sine(start, end);
     let offset = com.length() as f64;
     let origin_shift = (end.translation - start.translation).length() as f64;
     let shift_bound = origin_shift + 2.0 * sine * offset + 1.0e-5 * offset;
@@ -297,8 +296,7 @@ pub(crate) fn moved(
         // travel: rapier's reach for the turning extent, and `π·|sin(θ/2)|`
         // for the short angle (no atan2, no walk over the colliders).
         let (short, extent) = s.exact.unwrap_or_else(|| {
-            let dq = end.rotation * start.pose.rotation.inverse();
-            let sine = (dq.xyz().length() as f64).min(1.0);
+            let sine = half_angle_sine(&start.pose, &end).min(1.0);
             let reach = rb.mass_properties().max_extent() as f64;
             ((PI * sine) * (1.0 + 1.0e-6), reach)
         });
