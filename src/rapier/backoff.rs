@@ -39,6 +39,36 @@ pub(crate) const BACKOFF: f64 = 0.1;
 /// stop (`tolerance = 0.25·linear_slop` in parry's `sweep_time_of_impact`).
 const TOLERANCE: f64 = 0.25;
 
+/// Share of the thinner shape's thickness ([`thinner`]) a pair touching at
+/// the start whose contact is not driven in may sink within a step before
+/// the stage steps in, when that is more than the sink: a cone rolling on
+/// the floor at 15 rad/s dips some 6 mm into it over a step, since its
+/// motion turns it about its centre, not about the contact line. The
+/// contacts undo that, as without CCD (rapier's own CCD leaves a touching
+/// pair alone unless it could pass a whole thickness); held at its start
+/// instead, step after step, the cone lost its roll.
+const SINK_SHARE: f64 = 0.25;
+
+/// The thickness of the thinner of two shapes, metres: each shape's the
+/// least of parry's `ccd_thickness` (a box's least half-extent, a ball's
+/// or a cylinder's radius, the thinnest part of a compound) and its local
+/// box's least half-extent (a flat cylinder's half-height); a shape with
+/// neither (a triangle, a half-space) counts as thick as the other.
+fn thinner(moving: &dyn Shape, target: &dyn Shape) -> f64 {
+    let thickness = |s: &dyn Shape| {
+        let own = s.ccd_thickness() as f64;
+        let boxed = s.compute_local_aabb().half_extents().min_element() as f64;
+        [own, boxed]
+            .into_iter()
+            .filter(|t| *t > 0.0 && t.is_finite())
+            .reduce(f64::min)
+    };
+    match (thickness(moving), thickness(target)) {
+        (Some(a), Some(b)) => a.min(b),
+        (one, other) => one.or(other).unwrap_or(0.0),
+    }
+}
+
 /// What the stage needs of rapier's own rules to hand a hit back.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct HandBack {
@@ -86,14 +116,31 @@ impl HandBack {
     /// is deepest (a ball or capsule stopped `slop` deep that slides on
     /// wobbles around that depth from sample to sample: held at its start
     /// for that, it would lose its velocity).
-    pub fn allowed_depth(&self, gap0: f64, moving: &ShapeMotion, target: &ShapeMotion) -> f64 {
+    ///
+    /// A pair whose contact point is not driven in (`driven`, how far it
+    /// approaches along the normal over the rest of the step, is within
+    /// the sink) may also sink [`SINK_SHARE`] of the thinner shape: its
+    /// depth then comes from the turn about the body's centre, not from
+    /// the contact, as for a cone rolling on the floor.
+    pub fn allowed_depth(
+        &self,
+        gap0: f64,
+        driven: f64,
+        moving: &ShapeMotion,
+        target: &ShapeMotion,
+    ) -> f64 {
         let stop = self.stop_gap(moving, target);
         let rounded = if stop < 0.0 {
             TOLERANCE * self.slop - stop
         } else {
             0.0
         };
-        (-gap0).max(self.sink).max(rounded)
+        let turning = if driven <= self.sink {
+            SINK_SHARE * thinner(moving.shape, target.shape)
+        } else {
+            0.0
+        };
+        (-gap0).max(self.sink).max(rounded).max(turning)
     }
 
     /// For a rounded pair shallower at the start (its gap then `gap0`)
@@ -736,6 +783,42 @@ mod tests {
             motion: target,
         };
         rules().stop_gap(&a, &b)
+    }
+
+    /// A touching pair whose contact is not driven in may sink a quarter
+    /// of the thinner shape (the cone's radius against a thicker floor, a
+    /// flat cylinder's half-height, a box against a mesh with no
+    /// thickness); one driven in, only the sink.
+    #[test]
+    fn a_pair_turning_on_its_contact_may_sink_a_share_of_the_thinner_shape() {
+        use rapier3d::parry::shape::Cone;
+        let (cone, disc) = (Cone::new(0.3, 0.2), Cylinder::new(0.05, 0.2));
+        let floor = Cuboid::new(Vector::new(20.0, 0.5, 20.0));
+        let (cube, triangle) = (
+            Cuboid::new(Vector::splat(0.4)),
+            rapier3d::parry::shape::Triangle::new(
+                Vector::new(-1.0, 0.0, -1.0),
+                Vector::new(1.0, 0.0, -1.0),
+                Vector::new(0.0, 0.0, 1.0),
+            ),
+        );
+        let allowed = |s1: &dyn Shape, s2: &dyn Shape, driven: f64| {
+            let a = ShapeMotion {
+                shape: s1,
+                motion: moving(),
+            };
+            let b = ShapeMotion {
+                shape: s2,
+                motion: fixed(),
+            };
+            rules().allowed_depth(-0.001, driven, &a, &b)
+        };
+        let near = |x: f64, y: f64| (x - y).abs() < 1.0e-6;
+        assert!(near(allowed(&cone, &floor, 0.0), 0.05));
+        assert!(near(allowed(&disc, &floor, 0.001), 0.0125));
+        assert!(near(allowed(&cube, &triangle, -0.2), 0.1));
+        assert!(near(allowed(&cone, &floor, 0.006), 0.005));
+        assert!(near(allowed(&cube, &triangle, 1.0), 0.005));
     }
 
     /// parry's sweep target, `max(slop, r1 + r2 - slop)` between the cores,

@@ -64,9 +64,11 @@ pub struct CcdConfig {
     /// Metres a contact may go deep within a step before the stage steps
     /// in. A fast body touching something at the start may sink this far
     /// (or beyond its start depth, or a ball or capsule a little beyond
-    /// rapier's stop depth; rapier's contacts own such pairs, this only
-    /// keeps the solver from pushing a fast body deep, such as a spinning
-    /// edge into a wall), and a contact rapier casts to the contact itself
+    /// rapier's stop depth, or, where its contact point is not driven in,
+    /// as a rolling cone's is not, a quarter of the thinner shape;
+    /// rapier's contacts own such pairs, this only keeps the solver from
+    /// pushing a fast body deep, such as a spinning edge into a wall),
+    /// and a contact rapier casts to the contact itself
     /// made so late in the step that the pair cannot move this far after
     /// it is left to rapier's contacts as well (a slow landing is not
     /// clamped).

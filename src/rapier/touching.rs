@@ -85,7 +85,11 @@ pub(super) fn touching_pair(
 ) -> Result<Option<Toi>, CcdError> {
     let (s1, m1, s2, m2) = (moving.shape, &moving.motion, target.shape, &target.motion);
     let (gap0, contact0) = start;
-    let allowed = rules.allowed_depth(gap0, moving, target);
+    let span = opts.time_range;
+    let driven = contact0.as_ref().map_or(f64::INFINITY, |c| {
+        contact_approach(m1, m2, c, span.lo) * span.width()
+    });
+    let allowed = rules.allowed_depth(gap0, driven, moving, target);
     let lo = opts.time_range.lo;
     let hi = opts.time_range.hi;
     let travel = pair_travel(s1, m1, s2, m2);
@@ -247,6 +251,22 @@ pub(super) fn touching_pair(
         prev = tau;
     }
     Ok(None)
+}
+
+/// How fast the contact `c` (parry's, in world coordinates, at step
+/// fraction `tau`) closes along its normal, metres per step: the two
+/// bodies' velocities at the contact point (the centre's mean one over the
+/// step plus the turn's about where the centre is at `tau`), the moving
+/// one's less the target's, along the normal from the moving shape towards
+/// the target. About 0 for a body rolling on the target.
+fn contact_approach(moving: &Motion, target: &Motion, c: &Contact, tau: f64) -> f64 {
+    let at = (vec_from_glam(c.point1) + vec_from_glam(c.point2)) * 0.5;
+    let velocity = |m: &Motion| {
+        let centre = m.center().coords + m.displacement() * tau;
+        m.displacement() + m.rotation().cross(&(at - centre))
+    };
+    let normal = vec_from_glam(c.normal1);
+    normal.dot(&(velocity(moving) - velocity(target)))
 }
 
 /// Whether parry's depth against `shape` is one least translation (a
