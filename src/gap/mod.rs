@@ -166,6 +166,23 @@ impl PairGap {
         }
     }
 
+    /// The axes at the single time `t` without enclosing the poses, where
+    /// the family can (see `SupportMap::eval_at_a_time`); `false` when it
+    /// cannot, with `out` untouched.
+    pub fn eval_at_a_time<E: Enclosure>(
+        &self,
+        t: f64,
+        a: &crate::motion::Motion,
+        b: &crate::motion::Motion,
+        axes: u64,
+        out: &mut [E],
+    ) -> bool {
+        match self {
+            PairGap::SupportMap(g) => g.eval_at_a_time(t, a, b, axes, out),
+            _ => false,
+        }
+    }
+
     /// Enclose the axes set in `axes` over `span` into `out`. A family may
     /// stop early once an axis proves the pair apart ([`apart_by`]). The
     /// families that read one side's pose in the other's frame take it

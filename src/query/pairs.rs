@@ -334,6 +334,17 @@ impl<E: Enclosure> GapSet<E> for PairSet<'_, E> {
                     return;
                 }
                 let (fa, fb) = if *swapped { (fb, fa) } else { (fa, fb) };
+                if span.lo == span.hi
+                    && gap.eval_at_a_time(
+                        span.lo,
+                        self.frames.motion(fa),
+                        self.frames.motion(fb),
+                        axes,
+                        out,
+                    )
+                {
+                    return;
+                }
                 let (pa, pb) = (self.frames.pose(fa, span), self.frames.pose(fb, span));
                 // The pieces of a split composite share their frames (a box
                 // against each triangle of a mesh): the relative poses their
