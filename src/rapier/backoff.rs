@@ -53,7 +53,8 @@ const SINK_SHARE: f64 = 0.25;
 /// least of parry's `ccd_thickness` (a box's least half-extent, a ball's
 /// or a cylinder's radius, the thinnest part of a compound) and its local
 /// box's least half-extent (a flat cylinder's half-height); a shape with
-/// neither (a triangle, a half-space) counts as thick as the other.
+/// neither (a triangle, a flat mesh) counts as thick as the other, and so
+/// does a half-space (parry gives it `f32::MAX`).
 fn thinner(moving: &dyn Shape, target: &dyn Shape) -> f64 {
     let thickness = |s: &dyn Shape| {
         let own = s.ccd_thickness() as f64;
