@@ -421,5 +421,6 @@ impl AffineCcd {
                 self.report.elapsed = clock.elapsed();
             }
         }
+        self.workspace.remember_holds(&self.report.hits);
     }
 }

@@ -95,6 +95,37 @@ pub(crate) struct Sweeper<'w, 's> {
 pub(crate) struct Workspace {
     candidates: Vec<Candidate>,
     pub motions: MotionCache,
+    /// The collider pairs the last step's clamps held at their start
+    /// (moving collider, target), either way round (see [`HELD`]).
+    held: HashSet<(ColliderHandle, ColliderHandle)>,
+}
+
+/// A clamp at most this share into the step holds its body at its start.
+/// A pair held there is rapier's contacts' in the next step, kept only
+/// from sinking deeper than allowed (as a pair touching at the start is):
+/// held again instead, step after step, its bodies do not move while the
+/// contacts, which a clamp leaves the pair to, may see nothing to resolve
+/// (a spinning gram-heavy brick whose corner the sweep saw reach a ball at
+/// once, 2.6 mm apart: rapier's speculative contact gave no impulse, and
+/// both were held for 1,650 steps of the long soak, gaining speed from
+/// gravity alone).
+const HELD: f64 = 1.0e-3;
+
+impl Workspace {
+    /// Keeps the pairs of `hits` held at their start, for the next step.
+    pub fn remember_holds(&mut self, hits: &[super::report::CcdHitEvent]) {
+        self.held.clear();
+        self.held.extend(
+            hits.iter()
+                .filter(|h| h.fraction <= HELD)
+                .map(|h| (h.collider1, h.collider2)),
+        );
+    }
+
+    /// Whether the last step held the pair of `a` and `b` at its start.
+    fn was_held(&self, a: ColliderHandle, b: ColliderHandle) -> bool {
+        !self.held.is_empty() && (self.held.contains(&(a, b)) || self.held.contains(&(b, a)))
+    }
 }
 
 /// The earliest impact of one collider: when, against which target, and
@@ -131,9 +162,13 @@ struct Earliest {
 /// contact, unless they cannot get deeper than `sink` before the step ends
 /// (the pair's travel after it is smaller): rapier's contacts resolve
 /// those next step exactly as they would without CCD.
+///
+/// `held` marks the targets whose pair the last step held at its start
+/// (see [`HELD`]): they are the contacts', as touching pairs are.
 fn earliest(
     moving: &ShapeMotion,
     targets: &[ShapeMotion],
+    held: &[bool],
     opts: &QueryOptions,
     rules: &HandBack,
     report: &mut CcdReport,
@@ -174,11 +209,11 @@ fn earliest(
     // then the identity.
     let (pieces, travels, contacts_only): (Cow<[ShapeMotion]>, Cow<[f64]>, Vec<bool>) =
         if origin.len() == targets.len() {
-            (targets.into(), travels.into(), vec![false; targets.len()])
+            (targets.into(), travels.into(), held.to_vec())
         } else {
             let mut pieces: Vec<ShapeMotion> = origin.iter().map(|&j| targets[j]).collect();
             let mut piece_travels: Vec<f64> = origin.iter().map(|&j| travels[j]).collect();
-            let mut contacts_only = vec![false; pieces.len()];
+            let mut contacts_only: Vec<bool> = origin.iter().map(|&j| held[j]).collect();
             for (piece, &j) in triangles.iter().zip(&split) {
                 let motion = targets[j].motion;
                 piece_travels.push(pair_travel(
@@ -191,7 +226,7 @@ fn earliest(
                     shape: &piece.triangle,
                     motion,
                 });
-                contacts_only.push(piece.contacts_only);
+                contacts_only.push(piece.contacts_only || held[j]);
             }
             origin.extend(split);
             (pieces.into(), piece_travels.into(), contacts_only)
@@ -213,8 +248,8 @@ fn earliest(
 
 /// [`earliest`] over targets none of which is split further, with each
 /// pair's travel (`pair_travel`); `contacts_only` marks those rapier's CCD
-/// leaves to its contacts (only `touching_pair`'s check that they do not
-/// sink deep applies).
+/// leaves to its contacts, and those the last step held at their start
+/// (only `touching_pair`'s check that they do not sink deep applies).
 fn earliest_piece(
     moving: &ShapeMotion,
     targets: &[ShapeMotion],
@@ -599,6 +634,7 @@ pub(crate) fn sweep_body(
         }
         let mut solid = Vec::with_capacity(ws.candidates.len());
         let mut handles = Vec::with_capacity(ws.candidates.len());
+        let mut held = Vec::with_capacity(ws.candidates.len());
         for c in &ws.candidates {
             let co2 = &scene.colliders[c.handle];
             let motion2 = ws.motions.get(motions, c.handle, co2, scene.bodies)?;
@@ -609,6 +645,7 @@ pub(crate) fn sweep_body(
                         motion: motion2,
                     });
                     handles.push(c.handle);
+                    held.push(ws.was_held(h1, c.handle));
                 }
                 Interaction::Sensor => sensors.push(SensorPair {
                     collider1: h1,
@@ -626,7 +663,7 @@ pub(crate) fn sweep_body(
             shape: co1.shape(),
             motion: motion1,
         };
-        if let Some(e) = earliest(&moving, &solid, opts, &scene.hand_back(), report)? {
+        if let Some(e) = earliest(&moving, &solid, &held, opts, &scene.hand_back(), report)? {
             if best.is_none_or(|b| e.toi.fraction < b.toi.fraction) {
                 best = Some(BodyHit {
                     toi: e.toi,
