@@ -8,10 +8,11 @@
 //! (a wall, a floor's triangle, a sliding box), the other's ball is held
 //! against that side's own box instead, in its frame: tighter than its
 //! ball, and as cheap; and a triangle's against its plane too (the box of
-//! a tilted triangle is a thick slab around it). It pays on the many nodes a fast spin is cut into
-//! (each turning up to half a radian) that lie far from the contact; on
-//! nodes that turn little the family's own axes are tight and the balls
-//! seldom prove what they cannot, so they are not asked there.
+//! a tilted triangle is a thick slab around it). It pays on the many nodes
+//! a fast spin is cut into (each turning up to half a radian) that lie far
+//! from the contact; on nodes that turn little the family's own axes are
+//! tight and the balls seldom prove what they cannot, so they are not
+//! asked there.
 
 use super::pairs::PairContent;
 use crate::convert::vec_from_glam;

@@ -90,8 +90,7 @@ pub(super) fn touching_pair(
         contact_approach(m1, m2, c, span.lo) * span.width()
     });
     let allowed = rules.allowed_depth(gap0, driven, moving, target);
-    let lo = opts.time_range.lo;
-    let hi = opts.time_range.hi;
+    let (lo, hi) = (span.lo, span.hi);
     let travel = pair_travel(s1, m1, s2, m2);
     // The pair's points move too little relative to each other to get
     // deeper than allowed: nothing to do. (parry's depth of a convex pair,
@@ -229,7 +228,7 @@ pub(super) fn touching_pair(
                 return stop_when_deep(moving, target, tau, hi, depth, false, opts, report);
             }
             let rest = QueryOptions {
-                time_range: TimeSpan::new(tau, opts.time_range.hi),
+                time_range: TimeSpan::new(tau, hi),
                 skin: 0.0,
                 ..*opts
             };
