@@ -342,13 +342,7 @@ impl AffineCcd {
         // step, a comparison per awake one) and are not timed: the clock
         // reads would cost more than they do (a step with no fast body
         // reads no clock).
-        select::record(
-            bodies,
-            &self.config,
-            &mut self.report,
-            &mut self.starts,
-            &mut self.asleep,
-        );
+        select::record(bodies, &mut self.starts, &mut self.asleep);
 
         pipeline.step(
             gravity,

@@ -65,16 +65,11 @@ impl Asleep {
 /// `asleep`, which [`add_woken`] reads after the step: most sleeping
 /// bodies are never woken, and looking each one up and comparing its pose
 /// after the step cost more than rapier's whole step in a world of
-/// sleeping bodies (which rapier skips). Awake dynamic bodies
-/// with a non-finite state are reported and left out; a sleeping one is
-/// recorded as it is.
-pub(crate) fn record(
-    bodies: &RigidBodySet,
-    config: &CcdConfig,
-    report: &mut CcdReport,
-    out: &mut Vec<Start>,
-    asleep: &mut Asleep,
-) {
+/// sleeping bodies (which rapier skips). A body with a non-finite
+/// state is recorded as it is: rapier's step quarantines it (disables it
+/// and names it, and the stage reports it), and [`moved`] checks what it
+/// reads after the step.
+pub(crate) fn record(bodies: &RigidBodySet, out: &mut Vec<Start>, asleep: &mut Asleep) {
     out.clear();
     // Never 0, the step number of an entry not yet written.
     asleep.step = asleep.step.checked_add(1).unwrap_or(1);
@@ -84,21 +79,12 @@ pub(crate) fn record(
         // set, it is never read.
         if rb.is_sleeping() {
             asleep.put(handle, rb.position());
-            continue;
+        } else if !rb.is_fixed() && rb.is_enabled() {
+            out.push(Start {
+                handle,
+                pose: *rb.position(),
+            });
         }
-        if rb.is_fixed() || !rb.is_enabled() {
-            continue;
-        }
-        if !rb.position().is_finite() || !finite_vels(rb) {
-            if rb.is_dynamic() && !config.opted_out(rb.user_data) {
-                report.skip(handle, SkipReason::NonFinite);
-            }
-            continue;
-        }
-        out.push(Start {
-            handle,
-            pose: *rb.position(),
-        });
     }
 }
 
@@ -132,6 +118,10 @@ pub(crate) fn thickness(shape: &dyn Shape) -> f64 {
         | TypedShape::Polyline(_)
         | TypedShape::HeightField(_)
         | TypedShape::Voxels(_) => shape.compute_local_aabb().half_extents().min_element() as f64,
+        // Parry's `ccd_thickness` of the two commonest shapes, read without
+        // a second dynamic call (this runs for every moving body every step).
+        TypedShape::Ball(ball) => ball.radius as f64,
+        TypedShape::Cuboid(cuboid) => cuboid.half_extents.min_element() as f64,
         _ => shape.ccd_thickness() as f64,
     }
 }
@@ -157,13 +147,19 @@ pub(crate) fn turning_extent(rb: &RigidBody, colliders: &ColliderSet) -> f64 {
     extent
 }
 
+/// The thinnest of the body's enabled colliders (`thickness`), metres;
+/// infinite for a body without one. A plain loop: it runs for every
+/// moving body every step.
 pub(crate) fn body_thickness(rb: &RigidBody, colliders: &ColliderSet) -> f64 {
-    rb.colliders()
-        .iter()
-        .filter_map(|h| colliders.get(*h))
-        .filter(|co| co.is_enabled())
-        .map(|co| thickness(co.shape()))
-        .fold(f64::INFINITY, f64::min)
+    let mut thinnest = f64::INFINITY;
+    for handle in rb.colliders() {
+        if let Some(co) = colliders.get(*handle)
+            && co.is_enabled()
+        {
+            thinnest = thinnest.min(thickness(co.shape()));
+        }
+    }
+    thinnest
 }
 
 /// Whether `rb`, which moved from `start` to `end`, may tunnel: its
@@ -214,7 +210,10 @@ fn tunnels(
     // Arc length of the farthest point; the velocity term is rapier's.
     let arc = shift + extent * short.max(spin);
     let by_velocity = (linvel + angvel * extent) * horizon;
-    (arc.max(by_velocity) > allowed, Some((short, extent)))
+    // Not `max`, which would drop a NaN: a body in a non-finite state
+    // counts as fast, and the records' pass reports it.
+    let slow = arc <= allowed && by_velocity <= allowed;
+    (!slow, Some((short, extent)))
 }
 
 /// A moved body as the first pass of [`moved`] saw it: its index in the
@@ -232,8 +231,8 @@ pub(crate) struct Seen {
 /// then nothing is swept. A body counts as fast when its velocity would
 /// take it across its thickness within `horizon` seconds (`dt`, or the
 /// whole step when `dt` is a piece of it: a body that tunnels over the
-/// step is swept in every piece, however short). A body whose end state is
-/// not finite is reported and left out.
+/// step is swept in every piece, however short). A body in a non-finite
+/// state counts as fast, and is reported and left out of the records.
 ///
 /// Two passes: the first tests every moved body into `seen`, the second
 /// (only when one is fast) builds their records, the targets the fast ones
@@ -254,11 +253,12 @@ pub(crate) fn moved(
     seen.clear();
     let mut any_fast = false;
     for (i, start) in starts.iter().enumerate() {
-        let Some((rb, end)) = moved_body(start, bodies) else {
+        let Some(rb) = bodies.get(start.handle) else {
             continue;
         };
-        if !end.is_finite() || !finite_vels(rb) {
-            report.skip(start.handle, SkipReason::NonFinite);
+        let end = rb.position();
+        // A non-finite pose never equals itself, so it counts as moved.
+        if *end == start.pose || !rb.is_enabled() {
             continue;
         }
         let (tunnels, exact) = if may_flag(rb, config) {
@@ -266,7 +266,7 @@ pub(crate) fn moved(
                 rb,
                 colliders,
                 &start.pose,
-                &end,
+                end,
                 dt,
                 horizon,
                 config.fast_factor,
@@ -289,6 +289,12 @@ pub(crate) fn moved(
         let Some((rb, end)) = moved_body(start, bodies) else {
             continue;
         };
+        // Rapier's quarantine leaves no enabled body in a non-finite state
+        // after its step; checked again before anything is swept.
+        if !start.pose.is_finite() || !end.is_finite() || !finite_vels(rb) {
+            report.skip(start.handle, SkipReason::NonFinite);
+            continue;
+        }
         let com = rb.local_center_of_mass();
         let shift = (end * com - start.pose * com).length() as f64;
         let spin = rb.angvel().length() as f64 * dt;
@@ -358,12 +364,12 @@ mod tests {
         );
         let (config, mut report) = (CcdConfig::default(), CcdReport::default());
         let (mut starts, mut asleep) = (Vec::new(), Asleep::default());
-        record(&bodies, &config, &mut report, &mut starts, &mut asleep);
+        record(&bodies, &mut starts, &mut asleep);
         assert!(starts.is_empty(), "a sleeping body is not in the starts");
         let pose = asleep.get(sleeper).expect("kept in the table");
         assert_eq!(pose.translation, Vector::new(1.0, 2.0, 3.0));
         bodies[sleeper].wake_up(true);
-        record(&bodies, &config, &mut report, &mut starts, &mut asleep);
+        record(&bodies, &mut starts, &mut asleep);
         assert_eq!(starts.len(), 1, "an awake body is in the starts");
         assert!(asleep.get(sleeper).is_none(), "last step's entry is stale");
     }
