@@ -32,6 +32,8 @@ fn finite_vels(rb: &RigidBody) -> bool {
 #[derive(Default)]
 pub(crate) struct Asleep {
     step: u32,
+    /// How many entries this step wrote.
+    count: usize,
     poses: Vec<(u32, Pose)>,
 }
 
@@ -44,6 +46,7 @@ impl Asleep {
         let entry = &mut self.poses[index];
         entry.0 = self.step;
         entry.1 = *pose;
+        self.count += 1;
     }
 
     #[cold]
@@ -73,6 +76,7 @@ pub(crate) fn record(bodies: &RigidBodySet, out: &mut Vec<Start>, asleep: &mut A
     out.clear();
     // Never 0, the step number of an entry not yet written.
     asleep.step = asleep.step.checked_add(1).unwrap_or(1);
+    asleep.count = 0;
     for (handle, rb) in bodies.iter() {
         // Tested first, as most bodies of a large world sleep. A fixed or
         // disabled one in the table is harmless: never in rapier's awake
@@ -97,6 +101,9 @@ pub(crate) fn record(bodies: &RigidBodySet, out: &mut Vec<Start>, asleep: &mut A
 /// hardly displaced, and it is left out as a target that did not move.)
 /// `starts` stays in arena order, the order `record` writes.
 pub(crate) fn add_woken(islands: &IslandManager, asleep: &Asleep, starts: &mut Vec<Start>) {
+    if asleep.count == 0 {
+        return;
+    }
     let recorded = starts.len();
     for handle in islands.active_bodies() {
         if let Some(pose) = asleep.get(handle) {
