@@ -369,7 +369,6 @@ mod tests {
                 .translation(Vector::new(1.0, 2.0, 3.0))
                 .sleeping(true),
         );
-        let (config, mut report) = (CcdConfig::default(), CcdReport::default());
         let (mut starts, mut asleep) = (Vec::new(), Asleep::default());
         record(&bodies, &mut starts, &mut asleep);
         assert!(starts.is_empty(), "a sleeping body is not in the starts");
