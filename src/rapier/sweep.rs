@@ -7,7 +7,7 @@ use super::backoff::{
 };
 use super::candidates::{
     Candidate, FEW_PIECES, Interaction, MAX_PIECES, MeshPiece, gather, interaction, is_moving,
-    mesh_triangles, rough_swept_box, swept_aabb,
+    mesh_triangles, pose_path_box, rough_swept_box, swept_aabb,
 };
 use super::moved::Moved;
 use super::report::CcdReport;
@@ -605,6 +605,18 @@ pub(crate) fn sweep_body(
         );
         if ws.candidates.is_empty() {
             continue;
+        }
+        // A box from the two poses, still without the motion: a long shape
+        // turning in place meets most of its rough box's finds only here.
+        // (A candidate whose box holds the rough one, a floor's or a
+        // half-space's, meets it: both hold the collider at the start.)
+        if ws.candidates.iter().any(|c| !c.bounds.contains(&rough))
+            && let Some(path) = pose_path_box(motions, co1, scene.bodies)
+        {
+            ws.candidates.retain(|c| c.bounds.intersects(&path));
+            if ws.candidates.is_empty() {
+                continue;
+            }
         }
         // Then the motion and its own swept box, which the candidates must
         // meet too: first by the box they were found with (most are dropped
