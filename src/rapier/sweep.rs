@@ -7,7 +7,7 @@ use super::backoff::{
 };
 use super::candidates::{
     Candidate, FEW_PIECES, Interaction, MAX_PIECES, MeshPiece, gather, interaction, is_moving,
-    mesh_triangles, pose_path_box, rough_swept_box, swept_aabb,
+    mesh_triangles, pose_path_box, swept_aabb,
 };
 use super::moved::Moved;
 use super::report::CcdReport;
@@ -590,7 +590,8 @@ pub(crate) fn sweep_body(
         };
         // The broad phase with a rough box first: a collider that meets
         // nothing needs no motion (building one costs more than the query).
-        let rough = rough_swept_box(motions, co1, scene.bodies);
+        let rough = ws.motions.rough(motions, h1, co1, scene.bodies);
+        let cache = &mut ws.motions;
         gather(
             scene,
             broad_phase,
@@ -600,7 +601,7 @@ pub(crate) fn sweep_body(
             co1,
             &rough,
             |co2| targets.wants(co2, motions, scene),
-            |_, co2| Some(rough_swept_box(motions, co2, scene.bodies)),
+            |h2, co2| Some(cache.rough(motions, h2, co2, scene.bodies)),
             &mut ws.candidates,
         );
         if ws.candidates.is_empty() {

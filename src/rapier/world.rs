@@ -3,7 +3,7 @@
 //! ([`StepMotions`]).
 
 use super::backoff::HandBack;
-use super::candidates::swept_aabb;
+use super::candidates::{rough_swept_box, swept_aabb};
 use super::config::CcdConfig;
 use super::moved::Moved;
 use crate::convert::{iso_from_pose, point_from_glam, vec_from_glam};
@@ -62,7 +62,19 @@ impl<'a> StageWorld<'a> {
 #[derive(Default)]
 pub(crate) struct MotionCache {
     built: Vec<Option<Built>>,
+    /// Rough boxes (`candidates::rough_swept_box`) by collider slot: the
+    /// broad phase finds the same moving colliders again in every sweep of
+    /// a step (each query box is widened by the largest travel), most of
+    /// whose motions are never built.
+    rough: Vec<Option<Rough>>,
     step: u64,
+}
+
+struct Rough {
+    handle: ColliderHandle,
+    step: u64,
+    stamp: Stamp,
+    rough: Aabb,
 }
 
 struct Built {
@@ -93,6 +105,19 @@ struct Stamp {
     angvel: Vector,
     accel: Vector,
     dt: f64,
+}
+
+impl Stamp {
+    /// What collider `co`'s motion is built from, if its body moved.
+    fn of(motions: &StepMotions, co: &Collider) -> Option<Stamp> {
+        co.parent().and_then(|h| motions.body(h)).map(|m| Stamp {
+            start: m.start,
+            end: m.end,
+            angvel: m.angvel,
+            accel: m.accel,
+            dt: motions.dt,
+        })
+    }
 }
 
 impl MotionCache {
@@ -138,6 +163,38 @@ impl MotionCache {
         Ok(self.entry(motions, handle, co, bodies)?.swept(co))
     }
 
+    /// The rough box of collider `handle` over the step
+    /// (`candidates::rough_swept_box`), made once per body motion.
+    pub fn rough(
+        &mut self,
+        motions: &StepMotions,
+        handle: ColliderHandle,
+        co: &Collider,
+        bodies: &RigidBodySet,
+    ) -> Aabb {
+        let Some(stamp) = Stamp::of(motions, co) else {
+            return rough_swept_box(motions, co, bodies);
+        };
+        let slot = handle.into_raw_parts().0 as usize;
+        if slot >= self.rough.len() {
+            self.rough.resize_with(slot + 1, || None);
+        }
+        let step = self.step;
+        match &self.rough[slot] {
+            Some(r) if r.handle == handle && r.step == step && r.stamp == stamp => r.rough,
+            _ => {
+                let rough = rough_swept_box(motions, co, bodies);
+                self.rough[slot] = Some(Rough {
+                    handle,
+                    step,
+                    stamp,
+                    rough,
+                });
+                rough
+            }
+        }
+    }
+
     fn entry(
         &mut self,
         motions: &StepMotions,
@@ -145,13 +202,7 @@ impl MotionCache {
         co: &Collider,
         bodies: &RigidBodySet,
     ) -> Result<&mut Built, CcdError> {
-        let stamp = co.parent().and_then(|h| motions.body(h)).map(|m| Stamp {
-            start: m.start,
-            end: m.end,
-            angvel: m.angvel,
-            accel: m.accel,
-            dt: motions.dt,
-        });
+        let stamp = Stamp::of(motions, co);
         let slot = handle.into_raw_parts().0 as usize;
         if slot >= self.built.len() {
             self.built.resize_with(slot + 1, || None);
@@ -226,6 +277,53 @@ impl<'a> StepMotions<'a> {
                 }
             }
             _ => Motion::fixed(iso_from_pose(co.position())),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rapier3d::prelude::{ColliderBuilder, RigidBodyBuilder, Rotation};
+
+    /// The cached rough box is the one `rough_swept_box` makes for the
+    /// motion asked about: a body whose motion a round cut (same step, a
+    /// nearer end) gets a new box, and the next step starts afresh.
+    #[test]
+    fn a_cut_motion_gets_a_new_rough_box() {
+        let (mut bodies, mut colliders) = (RigidBodySet::new(), ColliderSet::new());
+        let body = bodies.insert(RigidBodyBuilder::dynamic());
+        let h = colliders.insert_with_parent(
+            ColliderBuilder::cuboid(0.5, 0.1, 0.2).build(),
+            body,
+            &mut bodies,
+        );
+        let co = &colliders[h];
+        let record = |end: Vector| Moved {
+            handle: body,
+            start: Pose::IDENTITY,
+            end: Pose::from_parts(end, Rotation::from_rotation_z(0.3)),
+            angvel: Vector::new(0.0, 0.0, 18.0),
+            accel: Vector::ZERO,
+            fast: true,
+            pusher: false,
+            travel: 10.0,
+        };
+        let mut cache = MotionCache::default();
+        for step in 0..2 {
+            cache.clear();
+            for end in [
+                Vector::new(8.0, 0.0, 0.0),
+                Vector::new(2.0 + step as f32, 0.0, 0.0),
+            ] {
+                let moved = [record(end)];
+                let motions = StepMotions::new(&moved, 1.0 / 60.0);
+                let direct = rough_swept_box(&motions, co, &bodies);
+                // Asked twice: made once, then read back.
+                for _ in 0..2 {
+                    assert_eq!(cache.rough(&motions, h, co, &bodies), direct, "end {end}");
+                }
+            }
         }
     }
 }
