@@ -99,7 +99,8 @@ enum Found {
 #[derive(Clone, Default)]
 struct Warm {
     f32: Option<(VoronoiSimplex, ParryPose)>,
-    f64: Option<(Simplex64, Pose64)>,
+    /// With the closest points' normal GJK found from it, if any.
+    f64: Option<(Simplex64, Pose64, Option<Vector3<f64>>)>,
 }
 
 /// Two convex shapes, each a core plus a border.
@@ -444,9 +445,7 @@ impl SupportMap {
                 // instead (cone queries: 3x the evaluations).
                 let most = up(up(d + slack) - self.skin - TOUCHING * sizes).max(least);
                 self.last.set(Some(m));
-                let gap = m.dot(&rel.translation.vector)
-                    - self.a.support_f64(&m)
-                    - self.b.support_f64(&-(rel.rotation.inverse() * m));
+                let gap = self.gap_along(&m, &rel);
                 let lo = crate::enclosure::rounding::down(gap - slack - self.skin);
                 (
                     Interval::new(lo.clamp(least, most), most),
@@ -477,6 +476,15 @@ impl SupportMap {
         true
     }
 
+    /// How far apart the shapes are along the unit direction `m` (in
+    /// `a`'s frame, from `a` towards `b`) at the relative pose `rel`, from
+    /// their supports in plain `f64`: negative where they overlap along it.
+    fn gap_along(&self, m: &Vector3<f64>, rel: &Isometry3<f64>) -> f64 {
+        m.dot(&rel.translation.vector)
+            - self.a.support_f64(m)
+            - self.b.support_f64(&-(rel.rotation.inverse() * m))
+    }
+
     /// The closest points' unit normal (from `a` towards `b`, `a`'s frame)
     /// and their distance at the relative pose `rel`, by parry3d-f64's GJK
     /// over our own support points, started from the last such query's
@@ -484,47 +492,71 @@ impl SupportMap {
     /// overlap, `None` when GJK has no answer.
     fn closest_at(&self, rel: &Isometry3<f64>) -> Option<Option<(Vector3<f64>, f64)>> {
         let pos12 = pose64_from_iso(rel);
+        let cold = || {
+            let start = match self.last.get() {
+                Some(last) => Vec64::new(last.x, last.y, last.z),
+                None => pos12.translation.try_normalize().unwrap_or(Vec64::X),
+            };
+            let mut simplex = Simplex64::new();
+            simplex.reset(Cso64::from_shapes(&pos12, &self.a, &self.b, start));
+            simplex
+        };
+        let gjk = |simplex: &mut Simplex64| {
+            gjk64::closest_points(
+                &pos12,
+                &self.a,
+                &self.b,
+                f64::from(PREDICTION),
+                true,
+                simplex,
+            )
+        };
         let search = || {
             let mut kept = self.warm.borrow_mut().take();
-            let mut simplex = match kept.as_ref().and_then(|w| w.f64.as_ref()) {
-                Some((simplex, old12)) => {
+            let found_last = kept.as_ref().and_then(|w| w.f64.as_ref()).and_then(|w| w.2);
+            let warm = kept
+                .as_ref()
+                .and_then(|w| w.f64.as_ref())
+                .map(|(simplex, old12, _)| {
                     let mut simplex = simplex.clone();
                     let back = old12.inverse();
                     simplex.modify_pnts(&|p| {
                         *p = Cso64::new(p.orig1, pos12 * (back * p.orig2));
                     });
                     simplex
-                }
-                None => {
-                    let start = match self.last.get() {
-                        Some(last) => Vec64::new(last.x, last.y, last.z),
-                        None => pos12.translation.try_normalize().unwrap_or(Vec64::X),
-                    };
-                    let mut simplex = Simplex64::new();
-                    simplex.reset(Cso64::from_shapes(&pos12, &self.a, &self.b, start));
-                    simplex
-                }
-            };
-            let found = gjk64::closest_points(
-                &pos12,
-                &self.a,
-                &self.b,
-                f64::from(PREDICTION),
-                true,
-                &mut simplex,
-            );
-            if self.curved {
-                kept.get_or_insert_with(Box::default).f64 = Some((simplex, pos12));
+                });
+            // parry's GJK can end on a tetrahedron that holds the origin
+            // and still answer the closest points (its tetrahedron case with
+            // a positive lower bound); started from that one, it answers
+            // `Intersection` at once, for shapes apart (a cone 1.4 mm above
+            // a floor box, asked twice at one pose: a near miss the stage
+            // clamped). Such an answer is asked again from scratch when the
+            // normal that simplex gave still separates the shapes
+            // (overlapping shapes are apart along none; on the cone
+            // benchmark every such answer was a true overlap).
+            let from_tetrahedron = warm.as_ref().is_some_and(|s| s.dimension() == 3);
+            let mut simplex = warm.unwrap_or_else(cold);
+            let mut found = gjk(&mut simplex);
+            if from_tetrahedron
+                && found == Gjk64Result::Intersection
+                && found_last.is_some_and(|m| self.gap_along(&m, rel) > 0.0)
+            {
+                simplex = cold();
+                found = gjk(&mut simplex);
             }
-            self.warm.replace(kept);
-            match found {
-                Gjk64Result::ClosestPoints(p1, p2, n) => {
-                    let n = Vector3::new(n.x, n.y, n.z).try_normalize(1.0e-9)?;
-                    Some(Some((n, (p2 - p1).length())))
-                }
+            let answer = match found {
+                Gjk64Result::ClosestPoints(p1, p2, n) => Vector3::new(n.x, n.y, n.z)
+                    .try_normalize(1.0e-9)
+                    .map(|n| Some((n, (p2 - p1).length()))),
                 Gjk64Result::Intersection => Some(None),
                 _ => None,
+            };
+            if self.curved {
+                let normal = answer.flatten().map(|(n, _)| n);
+                kept.get_or_insert_with(Box::default).f64 = Some((simplex, pos12, normal));
             }
+            self.warm.replace(kept);
+            answer
         };
         std::panic::catch_unwind(std::panic::AssertUnwindSafe(search))
             .ok()
