@@ -218,17 +218,21 @@ fn roll_cone(ccd: Ccd, spin: f32, steps: usize) -> (f32, usize) {
 /// the step's end (about 2 mm at 8 rad/s, 6 mm at 15): the contacts undo
 /// that, as they do without CCD. The stage leaves it rolling as rapier's
 /// own CCD does; holding it back at each such dip (as a sink of 5 mm did)
-/// stopped it dead within 200 steps.
+/// stopped it dead within 200 steps. At 25 rad/s it bounces on landing and
+/// its rim skims the floor a millimetre or so above it: taking that for a
+/// touch (a GJK answer believed, see `a_cone_skimming_a_floor_box_is_not_touching`)
+/// clamped it in mid-air until it stood still.
 #[test]
 fn a_rolling_cone_keeps_rolling_as_with_rapiers_ccd() {
-    for (spin, most_clamps) in [(8.0, 0), (15.0, 4)] {
+    for (spin, most_clamps) in [(8.0, 0), (15.0, 4), (25.0, 5)] {
         let (speed, clamps) = roll_cone(Ccd::Affine, spin, 300);
         let (speed_rapier, _) = roll_cone(Ccd::Rapier, spin, 300);
         println!(
             "{spin} rad/s: after 300 steps affine {speed:.3} m/s ({clamps} clamps), \
              rapier {speed_rapier:.3} m/s"
         );
-        // The clamps allowed are its landing's (it starts 5 cm up).
+        // The clamps allowed are its landing's (it starts 5 cm up) and, at
+        // 25 rad/s, its bounces'.
         assert!(
             clamps <= most_clamps,
             "{spin} rad/s: the rolling cone was clamped {clamps} times"
