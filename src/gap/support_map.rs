@@ -417,9 +417,9 @@ impl SupportMap {
         const AXES: [[f64; 3]; 3] = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
         // cos of a milliradian.
         const NEAR: f64 = 1.0 - 5.0e-7;
-        let faces_a = matches!(self.a.core, Core::Cuboid(_)).then_some(AXES.map(Vector3::from));
+        let faces_a = matches!(self.a.core, Core::Cuboid(_)).then(|| AXES.map(Vector3::from));
         let faces_b = matches!(self.b.core, Core::Cuboid(_))
-            .then_some(AXES.map(|u| rel.rotation * Vector3::from(u)));
+            .then(|| AXES.map(|u| rel.rotation * Vector3::from(u)));
         for u in faces_a.into_iter().chain(faces_b).flatten() {
             let c = n.dot(&u);
             if c.abs() > NEAR {
