@@ -441,22 +441,53 @@ fn a_nan_velocity_skips_that_body_and_the_others_step_on() {
         );
     }
     // The first step's report names the body (rapier then quarantines
-    // it, so later reports do not).
-    let mut run = Run::new(Ccd::Affine, Vector::ZERO);
-    let bad = run
-        .world
-        .insert(RigidBodyBuilder::dynamic(), ColliderBuilder::ball(0.25))
-        .0;
-    run.world.bodies[bad].set_linvel(Vector::new(f32::NAN, 0.0, 0.0), true);
-    run.step();
-    let report = run.stage.as_ref().unwrap().report();
-    assert!(
-        report
-            .skipped
-            .iter()
-            .any(|s| s.body == bad && s.reason == SkipReason::NonFinite),
-        "the NaN body is not reported: {report:?}"
-    );
+    // it, so later reports do not): a NaN velocity, a NaN pose or an
+    // infinite spin, each set by the user before the step (the stage
+    // leaves the check to rapier's quarantine before the step and checks
+    // again before it sweeps anything).
+    type Corrupt = fn(&mut RigidBody);
+    let corruptions: [(&str, Corrupt); 3] = [
+        ("NaN velocity", |rb| {
+            rb.set_linvel(Vector::new(f32::NAN, 0.0, 0.0), true)
+        }),
+        ("NaN pose", |rb| {
+            rb.set_translation(Vector::new(0.0, f32::NAN, 0.0), true)
+        }),
+        ("infinite spin", |rb| {
+            rb.set_angvel(Vector::new(0.0, f32::INFINITY, 0.0), true)
+        }),
+    ];
+    for (what, corrupt) in corruptions {
+        let mut run = Run::new(Ccd::Affine, Vector::ZERO);
+        let bad = run
+            .world
+            .insert(RigidBodyBuilder::dynamic(), ColliderBuilder::ball(0.25))
+            .0;
+        let fast = run
+            .world
+            .insert(
+                RigidBodyBuilder::dynamic()
+                    .translation(Vector::new(0.0, 3.0, 0.0))
+                    .linvel(Vector::new(300.0, 0.0, 0.0)),
+                ColliderBuilder::ball(0.25),
+            )
+            .0;
+        corrupt(&mut run.world.bodies[bad]);
+        run.step();
+        let report = run.stage.as_ref().unwrap().report();
+        assert!(
+            report
+                .skipped
+                .iter()
+                .any(|s| s.body == bad && s.reason == SkipReason::NonFinite),
+            "{what}: the body is not reported: {report:?}"
+        );
+        assert!(
+            run.x(fast) > 4.0,
+            "{what}: the healthy fast body did not step on (x = {})",
+            run.x(fast)
+        );
+    }
 }
 
 #[test]
