@@ -255,15 +255,14 @@ impl SupportMap {
         if let Some(n) = core_direction(&self.a.core, &self.b.core, &rel) {
             return (n, None);
         }
-        let (n, distance) = self.parry_direction(&rel, width);
+        let (n, distance) = self.parry_direction(rel, width);
         (self.snap_to_face(n, &rel), distance)
     }
 
     /// [`Self::direction`] where it has no closed form: GJK in `f64` on
     /// narrow nodes of a curved pair, else parry's `f32` GJK (or EPA, or
     /// the shapes' own least-overlap axis, or parry's contact).
-    fn parry_direction(&self, rel: &Isometry3<f64>, width: f64) -> (Vector3<f64>, Option<f64>) {
-        let rel = *rel;
+    fn parry_direction(&self, rel: Isometry3<f64>, width: f64) -> (Vector3<f64>, Option<f64>) {
         let (depth, coarse) = (width > 0.0, width > COARSE_NODE);
         if width > 0.0
             && width < NARROW_NODE
@@ -548,18 +547,16 @@ impl SupportMap {
         };
         let search = || {
             let mut kept = self.warm.borrow_mut().take();
-            let found_last = kept.as_ref().and_then(|w| w.f64.as_ref()).and_then(|w| w.2);
-            let warm = kept
-                .as_ref()
-                .and_then(|w| w.f64.as_ref())
-                .map(|(simplex, old12, _)| {
-                    let mut simplex = simplex.clone();
-                    let back = old12.inverse();
-                    simplex.modify_pnts(&|p| {
-                        *p = Cso64::new(p.orig1, pos12 * (back * p.orig2));
-                    });
-                    simplex
+            let last = kept.as_ref().and_then(|w| w.f64.as_ref());
+            let found_last = last.and_then(|w| w.2);
+            let warm = last.map(|(simplex, old12, _)| {
+                let mut simplex = simplex.clone();
+                let back = old12.inverse();
+                simplex.modify_pnts(&|p| {
+                    *p = Cso64::new(p.orig1, pos12 * (back * p.orig2));
                 });
+                simplex
+            });
             // parry's GJK can end on a tetrahedron that holds the origin
             // and still answer the closest points (its tetrahedron case with
             // a positive lower bound); started from that one, it answers

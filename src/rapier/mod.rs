@@ -196,8 +196,56 @@ impl AffineCcd {
         let mut params = *integration_parameters;
         params.max_ccd_substeps = 0;
         let dt = params.dt;
-        if dt <= 0.0 || self.config.substeps <= 1 {
-            // One piece (the default): its report is the step's.
+        // One piece (the default) reports in `self.report` directly; with
+        // more, each piece's report is absorbed into the step's total.
+        let mut total = (dt > 0.0 && self.config.substeps > 1).then(CcdReport::default);
+        if total.is_some() {
+            substep::record_aims(bodies, &mut self.aims);
+        }
+        let (mut remaining, mut left) = (dt, self.config.substeps.max(1));
+        // Whether the last piece ended at a predicted impact.
+        let mut at_impact = false;
+        while left > 0 {
+            let (mut length, mut after) = (remaining, 0);
+            if let Some(total) = total.as_mut() {
+                // Predict over the rest of the step; the piece ends at the
+                // first impact. Right after one it is the shortest allowed:
+                // the contact just made bounces there (see
+                // `substep::piece`).
+                let clock = Instant::now();
+                let impact = if at_impact {
+                    Some(0.0)
+                } else if left > 1 {
+                    self.predict_impact(
+                        &params,
+                        gravity,
+                        remaining as f64,
+                        broad_phase,
+                        narrow_phase,
+                        bodies,
+                        colliders,
+                        impulse_joints,
+                        hooks,
+                        total,
+                    )
+                } else {
+                    None
+                };
+                (length, after) = substep::piece(remaining, left, impact, params.min_ccd_dt);
+                at_impact = impact.is_some_and(|t| t > 0.0) && after > 0;
+                // The last piece aims at the user's target itself.
+                let share = if after == 0 {
+                    1.0
+                } else {
+                    (dt - remaining + length) / dt
+                };
+                substep::aim(bodies, &self.aims, share);
+                total.elapsed += clock.elapsed();
+            }
+            let done = dt - remaining;
+            // The step's own length is `dt`; what reads `params` past here
+            // wants the piece's.
+            params.dt = length;
             self.report.clear();
             self.step_piece(
                 pipeline,
@@ -215,72 +263,15 @@ impl AffineCcd {
                 hooks,
                 events,
             );
-            return &self.report;
-        }
-        let substeps = self.config.substeps;
-        let mut total = CcdReport::default();
-        substep::record_aims(bodies, &mut self.aims);
-        let (mut remaining, mut left) = (dt, substeps);
-        // Whether the last piece ended at a predicted impact.
-        let mut at_impact = false;
-        while left > 0 {
-            // Predict over the rest of the step; the piece ends at the
-            // first impact. Right after one it is the shortest allowed:
-            // the contact just made bounces there (see `substep::piece`).
-            let clock = Instant::now();
-            let impact = if at_impact {
-                Some(0.0)
-            } else if left > 1 {
-                self.predict_impact(
-                    &params,
-                    gravity,
-                    remaining as f64,
-                    broad_phase,
-                    narrow_phase,
-                    bodies,
-                    colliders,
-                    impulse_joints,
-                    hooks,
-                    &mut total,
-                )
-            } else {
-                None
-            };
-            let (length, after) = substep::piece(remaining, left, impact, params.min_ccd_dt);
-            at_impact = impact.is_some_and(|t| t > 0.0) && after > 0;
-            // The last piece aims at the user's target itself.
-            let share = if after == 0 {
-                1.0
-            } else {
-                (dt - remaining + length) / dt
-            };
-            substep::aim(bodies, &self.aims, share);
-            total.elapsed += clock.elapsed();
-            let done = dt - remaining;
-            let mut piece = params;
-            piece.dt = length;
-            self.report.clear();
-            self.step_piece(
-                pipeline,
-                gravity,
-                &piece,
-                dt,
-                islands,
-                broad_phase,
-                narrow_phase,
-                bodies,
-                colliders,
-                impulse_joints,
-                multibody_joints,
-                soft_bodies,
-                hooks,
-                events,
-            );
-            total.absorb(&self.report, done as f64, dt as f64);
+            if let Some(total) = total.as_mut() {
+                total.absorb(&self.report, done as f64, dt as f64);
+            }
             remaining -= length;
             left = after;
         }
-        self.report = total;
+        if let Some(total) = total {
+            self.report = total;
+        }
         &self.report
     }
 

@@ -260,14 +260,9 @@ pub(crate) fn moved(
     seen.clear();
     let mut any_fast = false;
     for (i, start) in starts.iter().enumerate() {
-        let Some(rb) = bodies.get(start.handle) else {
+        let Some((rb, end)) = moved_body(start, bodies) else {
             continue;
         };
-        let end = rb.position();
-        // A non-finite pose never equals itself, so it counts as moved.
-        if *end == start.pose || !rb.is_enabled() {
-            continue;
-        }
         let (tunnels, exact) = if may_flag(rb, config) {
             tunnels(
                 rb,
@@ -302,6 +297,7 @@ pub(crate) fn moved(
             report.skip(start.handle, SkipReason::NonFinite);
             continue;
         }
+        let end = *end;
         let com = rb.local_center_of_mass();
         let shift = (end * com - start.pose * com).length() as f64;
         let spin = rb.angvel().length() as f64 * dt;
@@ -328,10 +324,10 @@ pub(crate) fn moved(
 
 /// The body of `start` and its pose now, if it is enabled and moved (a
 /// non-finite pose never equals itself, so it counts as moved).
-fn moved_body<'a>(start: &Start, bodies: &'a RigidBodySet) -> Option<(&'a RigidBody, Pose)> {
+fn moved_body<'a>(start: &Start, bodies: &'a RigidBodySet) -> Option<(&'a RigidBody, &'a Pose)> {
     let rb = bodies.get(start.handle)?;
-    let end = *rb.position();
-    (rb.is_enabled() && end != start.pose).then_some((rb, end))
+    let end = rb.position();
+    (rb.is_enabled() && *end != start.pose).then_some((rb, end))
 }
 
 /// Whether `rb` can be marked fast (a dynamic body not opted out) or a

@@ -95,6 +95,18 @@ impl Run {
             None => self.world.step(),
         }
     }
+
+    /// Whether the stage's last report skips `body` for a non-finite state
+    /// (`false` for rapier alone).
+    pub fn reported_non_finite(&self, body: rapier3d::prelude::RigidBodyHandle) -> bool {
+        self.stage.as_ref().is_some_and(|stage| {
+            stage
+                .report()
+                .skipped
+                .iter()
+                .any(|s| s.body == body && s.reason == affine_ccd::rapier::SkipReason::NonFinite)
+        })
+    }
 }
 
 /// Asserts that bodies `a` of `ours` and `b` of `theirs` (in pairs) have
