@@ -32,8 +32,13 @@ impl Affine {
     };
 
     /// A form with the given parts; non-finite parts give [`Affine::ENTIRE`].
+    /// One test of their sum stands for three: a NaN or an infinity in any
+    /// part makes it NaN or infinite. (A sum that overflows while the parts
+    /// do not, beyond 1e308 m, also gives the whole line: sound, and no
+    /// scene gets there.) Every operation ends here, so this is the
+    /// hottest branch of the arithmetic.
     fn checked(c: f64, s: f64, r: f64) -> Affine {
-        if c.is_finite() && s.is_finite() && r >= 0.0 && r.is_finite() {
+        if r >= 0.0 && (c + s + r).is_finite() {
             Affine { c, s, r }
         } else {
             Affine::ENTIRE
