@@ -37,6 +37,7 @@ impl Affine {
     /// do not, beyond 1e308 m, also gives the whole line: sound, and no
     /// scene gets there.) Every operation ends here, so this is the
     /// hottest branch of the arithmetic.
+    #[inline]
     fn checked(c: f64, s: f64, r: f64) -> Affine {
         if r >= 0.0 && (c + s + r).is_finite() {
             Affine { c, s, r }
@@ -48,6 +49,7 @@ impl Affine {
 
 impl Add for Affine {
     type Output = Affine;
+    #[inline]
     fn add(self, o: Affine) -> Affine {
         let c = self.c + o.c;
         let s = self.s + o.s;
@@ -59,6 +61,7 @@ impl Add for Affine {
 
 impl Sub for Affine {
     type Output = Affine;
+    #[inline]
     fn sub(self, o: Affine) -> Affine {
         self + (-o)
     }
@@ -66,6 +69,7 @@ impl Sub for Affine {
 
 impl Mul for Affine {
     type Output = Affine;
+    #[inline]
     fn mul(self, o: Affine) -> Affine {
         // (a0 + a1 e)(b0 + b1 e) = a0 b0 + (a0 b1 + a1 b0) e + a1 b1 e²,
         // e² = ½ + ½(2e² − 1) with 2e² − 1 ∈ [−1, 1].
@@ -85,6 +89,7 @@ impl Mul for Affine {
 
 impl Neg for Affine {
     type Output = Affine;
+    #[inline]
     fn neg(self) -> Affine {
         Affine {
             c: -self.c,
@@ -96,6 +101,7 @@ impl Neg for Affine {
 
 impl Add<f64> for Affine {
     type Output = Affine;
+    #[inline]
     fn add(self, k: f64) -> Affine {
         let c = self.c + k;
         Affine::checked(c, self.s, bound(self.r + c.abs() * f64::EPSILON))
@@ -104,6 +110,7 @@ impl Add<f64> for Affine {
 
 impl Sub<f64> for Affine {
     type Output = Affine;
+    #[inline]
     fn sub(self, k: f64) -> Affine {
         self + (-k)
     }
@@ -111,6 +118,7 @@ impl Sub<f64> for Affine {
 
 impl Mul<f64> for Affine {
     type Output = Affine;
+    #[inline]
     fn mul(self, k: f64) -> Affine {
         let (c, s) = (self.c * k, self.s * k);
         let r = bound(self.r * k.abs() + (c.abs() + s.abs()) * f64::EPSILON);
@@ -119,18 +127,21 @@ impl Mul<f64> for Affine {
 }
 
 impl AddAssign for Affine {
+    #[inline]
     fn add_assign(&mut self, o: Affine) {
         *self = *self + o;
     }
 }
 
 impl SubAssign for Affine {
+    #[inline]
     fn sub_assign(&mut self, o: Affine) {
         *self = *self - o;
     }
 }
 
 impl MulAssign for Affine {
+    #[inline]
     fn mul_assign(&mut self, o: Affine) {
         *self = *self * o;
     }
@@ -155,25 +166,30 @@ impl Enclosure for Affine {
     const KIND: Arithmetic = Arithmetic::Affine;
     const DEGREE: usize = 1;
 
+    #[inline]
     fn constant(c: f64) -> Affine {
         Affine::checked(c, 0.0, 0.0)
     }
 
+    #[inline]
     fn exact_value(&self) -> Option<f64> {
         (self.s == 0.0 && self.r == 0.0).then_some(self.c)
     }
 
+    #[inline]
     fn from_interval(iv: Interval) -> Affine {
         let c = iv.mid();
         let r = up(iv.hi - c).max(up(c - iv.lo));
         Affine::checked(c, 0.0, r)
     }
 
+    #[inline]
     fn time(span: TimeSpan) -> Affine {
         let (m, h) = span.center_radius();
         Affine::checked(m, h, 0.0)
     }
 
+    #[inline]
     fn range(&self) -> Interval {
         // Each end takes three roundings (the last one subtracting the
         // slack), each off by at most half an ulp of the terms' size:
@@ -185,18 +201,22 @@ impl Enclosure for Affine {
         Interval::new(self.c - s - self.r - slack, self.c + s + self.r + slack)
     }
 
+    #[inline]
     fn linear_lower(&self) -> (f64, f64) {
         (down(self.c - self.r), self.s)
     }
 
+    #[inline]
     fn linear_upper(&self) -> (f64, f64) {
         (up(self.c + self.r), self.s)
     }
 
+    #[inline]
     fn widen(self, radius: f64) -> Affine {
         Affine::checked(self.c, self.s, bound(self.r + radius))
     }
 
+    #[inline]
     fn scale(self, factor: Interval) -> Affine {
         // x·f = x·mid(f) + x·(f − mid(f)), the second part bounded by |x|·rad.
         let mid = factor.mid();
@@ -207,6 +227,7 @@ impl Enclosure for Affine {
         Affine::checked(c, s, r)
     }
 
+    #[inline]
     fn sqr(self) -> Affine {
         let c00 = self.c * self.c;
         let half11 = 0.5 * (self.s * self.s);
@@ -218,6 +239,7 @@ impl Enclosure for Affine {
         Affine::checked(c, s, r)
     }
 
+    #[inline]
     fn abs(self) -> Affine {
         let range = self.range();
         if range.lo >= 0.0 {
@@ -230,6 +252,7 @@ impl Enclosure for Affine {
         }
     }
 
+    #[inline]
     fn min(self, o: Affine) -> Affine {
         let (a, b) = (self.range(), o.range());
         if a.hi <= b.lo {
@@ -241,6 +264,7 @@ impl Enclosure for Affine {
         }
     }
 
+    #[inline]
     fn max(self, o: Affine) -> Affine {
         -((-self).min(-o))
     }
@@ -284,6 +308,7 @@ impl Enclosure for Affine {
     /// operation: the centre is a sum of three terms (two of them
     /// products) and the slope of two, each off by at most `γ₃ ≤ 2⁻⁵¹`
     /// times its terms' absolute sum.
+    #[inline]
     fn scaled_sum(self, a: f64, other: Affine, b: f64, k: f64, slack: f64) -> Affine {
         let (ca, cb) = (self.c * a, other.c * b);
         let (sa, sb) = (self.s * a, other.s * b);
@@ -303,6 +328,7 @@ impl Enclosure for Affine {
     /// product's `|½sᵢs'ᵢ|` (from `e² ∈ [0, 1]`) and its cross terms with
     /// the operands' error radii, as [`Mul`] does. For `N ≤ 16` the radius
     /// takes fewer than the 32 roundings [`bound`] allows.
+    #[inline]
     fn dot<const N: usize>(x: [Affine; N], y: [Affine; N]) -> Affine {
         let (mut c, mut s) = (0.0, 0.0);
         let (mut terms, mut nonlinear) = (0.0, 0.0);
@@ -325,6 +351,7 @@ impl Enclosure for Affine {
     /// One rounding bound for the whole sum: centre and slope are sums of
     /// `N` rounded products each, off by at most `γ_N < (N + 1)·ε` times
     /// their terms' absolute sum; the error radii scale with `|kᵢ|`.
+    #[inline]
     fn dot_f64<const N: usize>(x: [Affine; N], k: [f64; N]) -> Affine {
         let (mut c, mut s) = (0.0, 0.0);
         let (mut terms, mut radius) = (0.0, 0.0);
