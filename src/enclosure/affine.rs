@@ -198,7 +198,15 @@ impl Enclosure for Affine {
         // every axis of every node.
         let s = self.s.abs();
         let slack = (self.c.abs() + s + self.r) * (4.0 * f64::EPSILON) + f64::MIN_POSITIVE;
-        Interval::new(self.c - s - self.r - slack, self.c + s + self.r + slack)
+        let (lo, hi) = (self.c - s - self.r - slack, self.c + s + self.r + slack);
+        // `lo ≤ hi` unless a part is NaN (a form built by hand: the
+        // operations give the whole line instead): one comparison where
+        // `Interval::new` took three.
+        if lo <= hi {
+            Interval { lo, hi }
+        } else {
+            Interval::ENTIRE
+        }
     }
 
     #[inline]
