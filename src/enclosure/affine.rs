@@ -35,11 +35,12 @@ impl Affine {
     /// One test of their sum stands for three: a NaN or an infinity in any
     /// part makes it NaN or infinite. (A sum that overflows while the parts
     /// do not, beyond 1e308 m, also gives the whole line: sound, and no
-    /// scene gets there.) Every operation ends here, so this is the
-    /// hottest branch of the arithmetic.
+    /// scene gets there.) `r` is never negative here: every operation
+    /// builds it from magnitudes (or NaN, caught). Every operation ends
+    /// here, so this is the hottest branch of the arithmetic.
     #[inline]
     fn checked(c: f64, s: f64, r: f64) -> Affine {
-        if r >= 0.0 && (c + s + r).is_finite() {
+        if (c + s + r).is_finite() {
             Affine { c, s, r }
         } else {
             Affine::ENTIRE
