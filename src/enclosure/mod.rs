@@ -304,12 +304,17 @@ pub(crate) fn greatest<E: Enclosure>(p: impl IntoIterator<Item = E>) -> Option<E
 /// least (greatest) value at any time.
 pub(crate) fn least_greatest<E: Enclosure, const N: usize>(p: &[E; N]) -> (E, E) {
     let r = p.each_ref().map(|x| x.range());
-    let lowest = (0..N)
-        .min_by(|&i, &j| r[i].lo.total_cmp(&r[j].lo))
-        .unwrap_or(0);
-    let highest = (0..N)
-        .max_by(|&i, &j| r[i].hi.total_cmp(&r[j].hi))
-        .unwrap_or(0);
+    // The first lowest and the last highest (ranges are never NaN: plain
+    // comparisons, where `total_cmp` took integer work on every pair).
+    let (mut lowest, mut highest) = (0, 0);
+    for (i, x) in r.iter().enumerate().skip(1) {
+        if x.lo < r[lowest].lo {
+            lowest = i;
+        }
+        if x.hi >= r[highest].hi {
+            highest = i;
+        }
+    }
     let least = if (0..N).all(|j| j == lowest || r[lowest].hi <= r[j].lo) {
         p[lowest]
     } else {
