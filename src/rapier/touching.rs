@@ -128,13 +128,17 @@ pub(super) fn touching_pair(
     // less). Against a mesh parry's samples are cheap (no EPA), and a
     // search over the mesh for the whole step is not.
     if convex && roundings(moving, target) > allowed + DEEPER {
+        // A pair whose contact point is being driven in most often gets
+        // that deep soon (a capsule a clamp left at its allowed depth, still
+        // headed into the wall): its stop is searched for first just after
+        // the start, where the nodes are narrow from the outset.
         return stop_when_deep(
             moving,
             target,
             lo,
             hi,
             allowed + DEEPER,
-            false,
+            driven > 0.0,
             opts,
             report,
         );
