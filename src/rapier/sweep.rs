@@ -347,6 +347,12 @@ fn earliest_piece(
     // farther than that, it is apart),
     // along which the pair cannot close its start separation
     // (`apart_along`, or from the mesh's vertices, `mesh_stays_apart`).
+    let far = |t: &ShapeMotion| {
+        let travel = pair_relative_travel(moving.shape, &moving.motion, t.shape, &t.motion);
+        let origin = t.motion.pose_at(lo).translation.vector.amax() as f32;
+        let origin = Aabb::new(Vector::splat(-origin), Vector::splat(origin));
+        travel * (1.0 + 1.0e-3) + 1.0e-4 + box_rounding(&moving_box, &origin)
+    };
     let stays_apart = |t: &ShapeMotion, known: Option<&Contact>| {
         let convex = moving.shape.is_convex() && t.shape.is_convex();
         if !convex && (moving.shape.as_trimesh().is_none() || !t.shape.is_convex()) {
@@ -354,17 +360,11 @@ fn earliest_piece(
         }
         let normal = match known {
             Some(c) => c.normal1,
-            None => {
-                let travel = pair_relative_travel(moving.shape, &moving.motion, t.shape, &t.motion);
-                let origin = t.motion.pose_at(lo).translation.vector.amax() as f32;
-                let origin = Aabb::new(Vector::splat(-origin), Vector::splat(origin));
-                let far = travel * (1.0 + 1.0e-3) + 1.0e-4 + box_rounding(&moving_box, &origin);
-                match start_gap(t, far) {
-                    Some((_, None)) => return true,
-                    Some((_, Some(c))) => c.normal1,
-                    None => return false,
-                }
-            }
+            None => match start_gap(t, far(t)) {
+                Some((_, None)) => return true,
+                Some((_, Some(c))) => c.normal1,
+                None => return false,
+            },
         };
         if convex {
             apart_along(moving, t, normal)
@@ -404,14 +404,26 @@ fn earliest_piece(
             alive.push(j);
             continue;
         }
-        // Only a pair within its band reads its start gap here.
+        // Only a pair within its band reads its start gap here. A convex
+        // pair reads it as far as `stays_apart` would (GJK costs the same
+        // whatever the reach), so that a pair beyond its band is not asked
+        // twice; a mesh's contact visits every part within the reach, and
+        // reads only the band first.
         let band_reach = past_band(bands[j]);
-        match start_gap(t, band_reach) {
+        let convex = moving.shape.is_convex() && t.shape.is_convex();
+        let ask = if convex {
+            band_reach.max(far(t))
+        } else {
+            band_reach
+        };
+        match start_gap(t, ask) {
             Some(start) if start.0 <= bands[j] => {
                 if let Some(found) = close(j, start, report)? {
                     keep(found);
                 }
             }
+            // Nothing within `far` either: apart, as `stays_apart` finds.
+            Some((_, None)) if convex => {}
             Some((_, contact)) if stays_apart(t, contact.as_ref()) => {}
             _ => alive.push(j),
         }
