@@ -14,6 +14,7 @@ use rapier3d::prelude::{
     Collider, ColliderHandle, ColliderSet, ImpulseJointSet, PhysicsHooks, Pose, RigidBodyHandle,
     RigidBodySet, Vector,
 };
+use std::sync::atomic::{AtomicU64, Ordering};
 
 /// Everything the pair rules read.
 pub(crate) struct StageWorld<'a> {
@@ -74,6 +75,10 @@ struct Rough {
     handle: ColliderHandle,
     step: u64,
     stamp: Stamp,
+    /// The last motion set (`StepMotions::id`) it was made or found fresh
+    /// under: asked under the same set again, it is fresh without
+    /// comparing the stamp (two poses and two vectors).
+    seen: u64,
     rough: Aabb,
 }
 
@@ -81,6 +86,8 @@ struct Built {
     handle: ColliderHandle,
     step: u64,
     stamp: Option<Stamp>,
+    /// As [`Rough::seen`].
+    seen: u64,
     motion: Motion,
     swept: Option<Aabb>,
 }
@@ -172,22 +179,33 @@ impl MotionCache {
         co: &Collider,
         bodies: &RigidBodySet,
     ) -> Aabb {
+        let slot = handle.into_raw_parts().0 as usize;
+        let step = self.step;
+        if let Some(Some(r)) = self.rough.get(slot)
+            && r.handle == handle
+            && r.step == step
+            && r.seen == motions.id
+        {
+            return r.rough;
+        }
         let Some(stamp) = Stamp::of(motions, co) else {
             return rough_swept_box(motions, co, bodies);
         };
-        let slot = handle.into_raw_parts().0 as usize;
         if slot >= self.rough.len() {
             self.rough.resize_with(slot + 1, || None);
         }
-        let step = self.step;
-        match &self.rough[slot] {
-            Some(r) if r.handle == handle && r.step == step && r.stamp == stamp => r.rough,
+        match &mut self.rough[slot] {
+            Some(r) if r.handle == handle && r.step == step && r.stamp == stamp => {
+                r.seen = motions.id;
+                r.rough
+            }
             _ => {
                 let rough = rough_swept_box(motions, co, bodies);
                 self.rough[slot] = Some(Rough {
                     handle,
                     step,
                     stamp,
+                    seen: motions.id,
                     rough,
                 });
                 rough
@@ -202,22 +220,28 @@ impl MotionCache {
         co: &Collider,
         bodies: &RigidBodySet,
     ) -> Result<&mut Built, CcdError> {
-        let stamp = Stamp::of(motions, co);
         let slot = handle.into_raw_parts().0 as usize;
         if slot >= self.built.len() {
             self.built.resize_with(slot + 1, || None);
         }
         let step = self.step;
-        let fresh = |b: &Built| b.handle == handle && b.step == step && b.stamp == stamp;
-        if !self.built[slot].as_ref().is_some_and(fresh) {
-            let motion = motions.collider(co, bodies)?;
-            self.built[slot] = Some(Built {
-                handle,
-                step,
-                stamp,
-                motion,
-                swept: None,
-            });
+        let seen = |b: &Built| b.handle == handle && b.step == step && b.seen == motions.id;
+        if !self.built[slot].as_ref().is_some_and(seen) {
+            let stamp = Stamp::of(motions, co);
+            let fresh = |b: &Built| b.handle == handle && b.step == step && b.stamp == stamp;
+            match &mut self.built[slot] {
+                Some(b) if fresh(b) => b.seen = motions.id,
+                entry => {
+                    *entry = Some(Built {
+                        handle,
+                        step,
+                        stamp,
+                        seen: motions.id,
+                        motion: motions.collider(co, bodies)?,
+                        swept: None,
+                    })
+                }
+            }
         }
         Ok(self.built[slot].as_mut().expect("just built"))
     }
@@ -226,6 +250,9 @@ impl MotionCache {
 /// The moved bodies of this step, by handle, and the step length.
 pub(crate) struct StepMotions<'a> {
     pub moved: &'a [Moved],
+    /// Tells this set from every other one built before (see
+    /// [`MotionCache`]): while it lives, each body's motion in it is fixed.
+    id: u64,
     /// Per body handle slot, its index in `moved` (`u32::MAX`: none).
     index: Vec<u32>,
     pub dt: f64,
@@ -241,8 +268,13 @@ impl<'a> StepMotions<'a> {
         for (i, m) in moved.iter().enumerate() {
             index[slot(m.handle)] = i as u32;
         }
+        // A counter for identity only (no state rides on it): a round's
+        // motions are built anew in the same vector, so its address would
+        // not tell one round's set from the next.
+        static NEXT_ID: AtomicU64 = AtomicU64::new(0);
         StepMotions {
             moved,
+            id: NEXT_ID.fetch_add(1, Ordering::Relaxed),
             index,
             dt,
             margin: moved.iter().map(|m| m.travel).fold(0.0, f64::max),
