@@ -14,6 +14,7 @@ use rapier3d::prelude::{
     Collider, ColliderHandle, ColliderSet, ImpulseJointSet, PhysicsHooks, Pose, RigidBodyHandle,
     RigidBodySet, Vector,
 };
+use std::convert::Infallible;
 use std::sync::atomic::{AtomicU64, Ordering};
 
 /// Everything the pair rules read.
@@ -62,32 +63,66 @@ impl<'a> StageWorld<'a> {
 /// was built in, so clearing is one counter.
 #[derive(Default)]
 pub(crate) struct MotionCache {
-    built: Vec<Option<Built>>,
+    built: Vec<Option<Slot<Built>>>,
     /// Rough boxes (`candidates::rough_swept_box`) by collider slot: the
     /// broad phase finds the same moving colliders again in every sweep of
     /// a step (each query box is widened by the largest travel), most of
     /// whose motions are never built.
-    rough: Vec<Option<Rough>>,
+    rough: Vec<Option<Slot<Aabb>>>,
     step: u64,
 }
 
-struct Rough {
+/// A value kept at a collider's slot, with what it was made from.
+struct Slot<T> {
     handle: ColliderHandle,
     step: u64,
-    stamp: Stamp,
+    stamp: Option<Stamp>,
     /// The last motion set (`StepMotions::id`) it was made or found fresh
     /// under: asked under the same set again, it is fresh without
     /// comparing the stamp (two poses and two vectors).
     seen: u64,
-    rough: Aabb,
+    value: T,
 }
 
-struct Built {
-    handle: ColliderHandle,
+/// The fresh value at collider `handle`'s slot of `slots` for `step` and
+/// `motions`, made with `make` when missing or stale (`make`'s error
+/// leaves the slot as it was).
+fn fresh_slot<'s, T, E>(
+    slots: &'s mut Vec<Option<Slot<T>>>,
     step: u64,
-    stamp: Option<Stamp>,
-    /// As [`Rough::seen`].
-    seen: u64,
+    motions: &StepMotions,
+    handle: ColliderHandle,
+    co: &Collider,
+    make: impl FnOnce() -> Result<T, E>,
+) -> Result<&'s mut T, E> {
+    let i = handle.into_raw_parts().0 as usize;
+    if i >= slots.len() {
+        slots.resize_with(i + 1, || None);
+    }
+    let ours = |s: &Slot<T>| s.handle == handle && s.step == step;
+    if !slots[i]
+        .as_ref()
+        .is_some_and(|s| ours(s) && s.seen == motions.id)
+    {
+        let stamp = Stamp::of(motions, co);
+        match &mut slots[i] {
+            Some(s) if ours(s) && s.stamp == stamp => s.seen = motions.id,
+            slot => {
+                *slot = Some(Slot {
+                    handle,
+                    step,
+                    stamp,
+                    seen: motions.id,
+                    value: make()?,
+                })
+            }
+        }
+    }
+    Ok(&mut slots[i].as_mut().expect("just made").value)
+}
+
+/// A collider's motion and, once asked for, the box it sweeps.
+struct Built {
     motion: Motion,
     swept: Option<Aabb>,
 }
@@ -179,38 +214,9 @@ impl MotionCache {
         co: &Collider,
         bodies: &RigidBodySet,
     ) -> Aabb {
-        let slot = handle.into_raw_parts().0 as usize;
-        let step = self.step;
-        if let Some(Some(r)) = self.rough.get(slot)
-            && r.handle == handle
-            && r.step == step
-            && r.seen == motions.id
-        {
-            return r.rough;
-        }
-        let Some(stamp) = Stamp::of(motions, co) else {
-            return rough_swept_box(motions, co, bodies);
-        };
-        if slot >= self.rough.len() {
-            self.rough.resize_with(slot + 1, || None);
-        }
-        match &mut self.rough[slot] {
-            Some(r) if r.handle == handle && r.step == step && r.stamp == stamp => {
-                r.seen = motions.id;
-                r.rough
-            }
-            _ => {
-                let rough = rough_swept_box(motions, co, bodies);
-                self.rough[slot] = Some(Rough {
-                    handle,
-                    step,
-                    stamp,
-                    seen: motions.id,
-                    rough,
-                });
-                rough
-            }
-        }
+        let make = || Ok::<_, Infallible>(rough_swept_box(motions, co, bodies));
+        let Ok(rough) = fresh_slot(&mut self.rough, self.step, motions, handle, co, make);
+        *rough
     }
 
     fn entry(
@@ -220,30 +226,12 @@ impl MotionCache {
         co: &Collider,
         bodies: &RigidBodySet,
     ) -> Result<&mut Built, CcdError> {
-        let slot = handle.into_raw_parts().0 as usize;
-        if slot >= self.built.len() {
-            self.built.resize_with(slot + 1, || None);
-        }
-        let step = self.step;
-        let seen = |b: &Built| b.handle == handle && b.step == step && b.seen == motions.id;
-        if !self.built[slot].as_ref().is_some_and(seen) {
-            let stamp = Stamp::of(motions, co);
-            let fresh = |b: &Built| b.handle == handle && b.step == step && b.stamp == stamp;
-            match &mut self.built[slot] {
-                Some(b) if fresh(b) => b.seen = motions.id,
-                entry => {
-                    *entry = Some(Built {
-                        handle,
-                        step,
-                        stamp,
-                        seen: motions.id,
-                        motion: motions.collider(co, bodies)?,
-                        swept: None,
-                    })
-                }
-            }
-        }
-        Ok(self.built[slot].as_mut().expect("just built"))
+        fresh_slot(&mut self.built, self.step, motions, handle, co, || {
+            Ok(Built {
+                motion: motions.collider(co, bodies)?,
+                swept: None,
+            })
+        })
     }
 }
 
