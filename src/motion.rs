@@ -548,6 +548,19 @@ impl Motion {
         padded(linear + self.turning_chord(radius) + other.turning_chord(other_radius))
     }
 
+    /// An upper bound on how fast a point within `radius` of this frame's
+    /// origin and a point within `other_radius` of `other`'s move against
+    /// each other, metres per step (per unit of `τ`), at every time of the
+    /// step: the centres' relative velocity `d + 2·b·τ` (at most
+    /// `|d| + 2·|b|`) plus each point's turning speed `ρ·|θ|`. The distance
+    /// between two shapes changes no faster.
+    pub fn relative_speed_bound(&self, radius: f64, other: &Motion, other_radius: f64) -> f64 {
+        let linear =
+            (self.displacement - other.displacement).norm() + 2.0 * (self.bend - other.bend).norm();
+        let rates = self.turning_rate(radius) + other.turning_rate(other_radius);
+        padded(padded(linear) + rates)
+    }
+
     /// A bound on how much `n·(p − q)` grows over the step (`n` a unit
     /// direction), for any point `p` within `radius` of this frame's
     /// origin and `q` within `other_radius` of `other`'s: how much deeper

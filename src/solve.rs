@@ -162,6 +162,9 @@ pub struct SolveStats {
     pub pair_evaluations: u64,
     /// Axis evaluations (one axis function on one node).
     pub axis_evaluations: u64,
+    /// Conservative advancement steps taken before the search (one
+    /// distance bound at one time; pairs that turn fast).
+    pub advances: u64,
 }
 
 impl std::ops::AddAssign for SolveStats {
@@ -169,6 +172,7 @@ impl std::ops::AddAssign for SolveStats {
         self.nodes += o.nodes;
         self.pair_evaluations += o.pair_evaluations;
         self.axis_evaluations += o.axis_evaluations;
+        self.advances += o.advances;
     }
 }
 

@@ -26,6 +26,7 @@
 //! assert!((toi.time - 0.008).abs() < 1e-4 / 60.0);
 //! ```
 
+mod advance;
 mod balls;
 mod contact;
 mod frames;
@@ -255,6 +256,30 @@ impl Query {
                 });
             }
         }
+        // Pairs that turn fast are first advanced to where they may come
+        // close (see `advance`): the search starts at the earliest such
+        // time, and is not needed at all if every pair stays apart.
+        let span = solve_options.span;
+        let mut start = span.hi;
+        let mut advances = 0;
+        'pairs: for m in moving {
+            for t in targets {
+                let (until, steps) = advance::apart_until(m, t, span, options.skin);
+                advances += steps;
+                start = start.min(until);
+                if start <= span.lo {
+                    break 'pairs;
+                }
+            }
+        }
+        if start >= span.hi {
+            self.spent.advances = advances;
+            return Ok(None);
+        }
+        let solve_options = SolveOptions {
+            span: TimeSpan::new(start, span.hi),
+            ..solve_options
+        };
         let (outcome, hit) = options.arithmetic.dispatch(Search {
             solver: &mut self.solver,
             frames,
@@ -263,6 +288,7 @@ impl Query {
             options: &solve_options,
         })?;
         self.spent = outcome.stats;
+        self.spent.advances = advances;
         let Some((i, j)) = hit else {
             return Ok(None);
         };
