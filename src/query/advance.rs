@@ -326,7 +326,8 @@ mod tests {
             shape: &triangle,
             motion: floor,
         };
-        // Drops from 1.0 m to 0.5 m: its 0.2 m half-length stays 30 cm up.
+        // Drops from 1.0 m to 0.5 m: its corners (0.21 m from its centre)
+        // stay 29 cm up.
         let miss = ShapeMotion {
             shape: &cuboid,
             motion: flying(1.0, 30.0),
