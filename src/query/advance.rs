@@ -72,9 +72,9 @@ pub(super) fn apart_until(
     let Some((ca, cb)) = advances(a, b) else {
         return (lo, 0);
     };
-    let speed = a
-        .motion
-        .relative_speed_bound(ca.extent(), &b.motion, cb.extent());
+    // A hull's extent is a walk over its vertices: taken once.
+    let (reach_a, reach_b) = (ca.extent(), cb.extent());
+    let speed = a.motion.relative_speed_bound(reach_a, &b.motion, reach_b);
     if !(speed > 0.0 && speed.is_finite()) {
         return (lo, 0);
     }
@@ -87,7 +87,7 @@ pub(super) fn apart_until(
     while steps < MOST_STEPS {
         steps += 1;
         let (pa, pb) = (a.motion.pose_at(tau), b.motion.pose_at(tau));
-        let at = At::new(&pa, &pb, &ca, &cb);
+        let at = At::new(&pa, &pb, reach_a + reach_b);
         // How far the pair may advance from `tau` along `n`: apart beyond
         // the skin until `tau + clear/speed`, less `STALL`.
         let step_along = |n: &Vector3<f64>| {
@@ -121,13 +121,14 @@ struct At {
 }
 
 impl At {
-    fn new(pa: &Isometry3<f64>, pb: &Isometry3<f64>, ca: &Convex, cb: &Convex) -> At {
+    /// `extents`: how far the two shapes reach from their frames' origins
+    /// together, metres.
+    fn new(pa: &Isometry3<f64>, pb: &Isometry3<f64>, extents: f64) -> At {
         // The poses, the relative pose and the projections are each
         // rounded a few times in terms no larger than these sizes (and a
         // direction is unit to within as much): 1e-12 of them covers that
         // many times over.
-        let sizes =
-            pa.translation.vector.norm() + pb.translation.vector.norm() + ca.extent() + cb.extent();
+        let sizes = pa.translation.vector.norm() + pb.translation.vector.norm() + extents;
         At {
             rel: pa.inv_mul(pb),
             slack: up(1.0e-12 * sizes),
