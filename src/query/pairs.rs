@@ -176,15 +176,26 @@ struct PairSet<'s, E: Enclosure> {
     initial: usize,
     skin: f64,
     scratch: Vec<SubRegion<'s>>,
-    /// The box each composite pair's other side sweeps over the current
-    /// node, in its split frame (by composite pair id), made on first need
-    /// and cleared with every node.
-    sweeps: Vec<(u32, [Interval; 3])>,
+    /// The boxes the other sides of composite pairs sweep over the current
+    /// node, in their split frames, made on first need and cleared with
+    /// every node. Keyed by what the box is made of (the split frame, the
+    /// other side's frame and its box), not by pair: the pairs of a hull
+    /// with a mesh's tree nodes all share one.
+    sweeps: Vec<(SweepKey, [Interval; 3])>,
     /// Whole shapes that composite children pair with, read once
     /// ([`gap::Prepared`]), by the shape's address (the shapes are borrowed
     /// for the whole query, so an address names one shape).
     prepared: Vec<(usize, Option<gap::Prepared>)>,
     error: Option<CcdError>,
+}
+
+/// What a swept box is made of: the other side's box, carried from its
+/// frame into the split frame.
+#[derive(Clone, Copy, PartialEq)]
+struct SweepKey {
+    split: u32,
+    other: u32,
+    bounds: Bounds,
 }
 
 impl<'s, E: Enclosure> PairSet<'s, E> {
@@ -230,17 +241,22 @@ impl<'s, E: Enclosure> PairSet<'s, E> {
     /// The box the other side of composite pair `pair` sweeps over `span`
     /// in the pair's split frame (`composite::swept`), once per node.
     fn sweep_of(&mut self, pair: u32, span: TimeSpan) -> [Interval; 3] {
-        if let Some((_, sweep)) = self.sweeps.iter().find(|(p, _)| *p == pair) {
-            return *sweep;
-        }
         let PairContent::Composite(c) = &self.pairs[pair as usize].kind else {
             // Not a composite: nothing is excluded.
             return [Interval::new(f64::NEG_INFINITY, f64::INFINITY); 3];
         };
         let (split, other) = if c.split_b { (c.b, c.a) } else { (c.a, c.b) };
+        let key = SweepKey {
+            split: split.frame,
+            other: other.frame,
+            bounds: other.bounds,
+        };
+        if let Some((_, sweep)) = self.sweeps.iter().find(|(k, _)| *k == key) {
+            return *sweep;
+        }
         let rel = self.frames.relative(split.frame, other.frame, span);
         let sweep = composite::swept(&rel, &other.bounds);
-        self.sweeps.push((pair, sweep));
+        self.sweeps.push((key, sweep));
         sweep
     }
 
