@@ -48,6 +48,21 @@ impl Affine {
     }
 }
 
+/// The line midway between `lower` and `upper` (each `(a, b)` for
+/// `a + b·e`) and how far either is from it over `e ∈ [−1, 1]` (at an end:
+/// the lines are straight), rounded up to cover the roundings of all
+/// three: `(centre, slope, radius)`.
+#[inline]
+pub(crate) fn middle_line(lower: (f64, f64), upper: (f64, f64)) -> (f64, f64, f64) {
+    let c = 0.5 * (lower.0 + upper.0);
+    let s = 0.5 * (lower.1 + upper.1);
+    let half = 0.5 * ((upper.0 - lower.0) + (upper.1 - lower.1).abs());
+    // Each of the three is off by at most three half-ulps of its terms,
+    // whose sizes the parts bound: four ulps of them cover it.
+    let r = bound(half.max(0.0) + (c.abs() + s.abs() + half.abs()) * (4.0 * f64::EPSILON));
+    (c, s, r)
+}
+
 impl Add for Affine {
     type Output = Affine;
     #[inline]
@@ -218,6 +233,12 @@ impl Enclosure for Affine {
     #[inline]
     fn linear_upper(&self) -> (f64, f64) {
         (up(self.c + self.r), self.s)
+    }
+
+    #[inline]
+    fn between(lower: (f64, f64), upper: (f64, f64)) -> Affine {
+        let (c, s, r) = middle_line(lower, upper);
+        Affine::checked(c, s, r)
     }
 
     #[inline]
@@ -429,24 +450,6 @@ mod tests {
     }
 
     proptest! {
-        /// `greatest` of a few exact linear forms holds their pointwise
-        /// maximum at every time of the node (kept as one of them only
-        /// when that one is above the others throughout).
-        #[test]
-        fn the_greatest_holds_the_pointwise_maximum(
-            lines in prop::collection::vec((-10.0f64..10.0, -10.0f64..10.0), 1..8),
-        ) {
-            let forms: Vec<Affine> = lines.iter().map(|&(c, s)| Affine { c, s, r: 0.0 }).collect();
-            let g = crate::enclosure::greatest(forms).expect("not empty");
-            for k in 0..=64 {
-                let e = -1.0 + 2.0 * k as f64 / 64.0;
-                let max = lines.iter().map(|&(c, s)| c + s * e).fold(f64::NEG_INFINITY, f64::max);
-                let (lo, hi) = (g.c + g.s * e - g.r, g.c + g.s * e + g.r);
-                let tol = 1e-12 * (1.0 + max.abs());
-                prop_assert!(lo - tol <= max && max <= hi + tol, "e {e}: max {max} not in [{lo}, {hi}] of {g:?}");
-            }
-        }
-
         /// The range holds the one rounded outward step by step (a `next_up`
         /// or `next_down` after each operation), which holds the exact ends.
         #[test]

@@ -41,6 +41,7 @@ pub(crate) mod series;
 mod taylor;
 
 pub use affine::Affine;
+pub(crate) use affine::middle_line;
 pub use interval::Interval;
 pub use taylor::{Taylor, Taylor2, Taylor3};
 
@@ -198,6 +199,17 @@ pub trait Enclosure:
     /// Intervals give `(hi, 0)`.
     fn linear_upper(&self) -> (f64, f64);
 
+    /// An enclosure of any function that lies between the lines `lower`
+    /// and `upper` (each `(a, b)` for `a + b·e`) at every `e ∈ [−1, 1]`.
+    /// By default the range between them; forms with a slope keep the
+    /// middle line's.
+    fn between(lower: (f64, f64), upper: (f64, f64)) -> Self {
+        Self::from_interval(Interval::new(
+            rounding::down(lower.0 - lower.1.abs()),
+            rounding::up(upper.0 + upper.1.abs()),
+        ))
+    }
+
     /// The enclosure widened by `± radius` (`radius ≥ 0`).
     fn widen(self, radius: f64) -> Self;
 
@@ -267,33 +279,6 @@ pub trait Enclosure:
     /// it was computed on (`to ⊆ from`): its local symbol becomes `to`'s.
     /// Intervals do not depend on the symbol and come back unchanged.
     fn restrict(self, from: TimeSpan, to: TimeSpan) -> Self;
-}
-
-/// The pointwise greatest of `p` (`None` when it is empty), each range
-/// taken once (chaining [`Enclosure::max`] takes both operands' ranges on
-/// every call). One above all the others at every time of the node is
-/// kept as it is; otherwise the bounds of the greatest value at any time.
-pub(crate) fn greatest<E: Enclosure>(p: impl IntoIterator<Item = E>) -> Option<E> {
-    let mut p = p.into_iter();
-    let mut top = p.next()?;
-    let mut top_range = top.range();
-    // The largest lower bound of all, and upper bound of all but `top`.
-    let (mut best_lo, mut others_hi) = (top_range.lo, f64::NEG_INFINITY);
-    for x in p {
-        let r = x.range();
-        best_lo = best_lo.max(r.lo);
-        if r.hi > top_range.hi {
-            others_hi = others_hi.max(top_range.hi);
-            (top, top_range) = (x, r);
-        } else {
-            others_hi = others_hi.max(r.hi);
-        }
-    }
-    Some(if top_range.lo >= others_hi {
-        top
-    } else {
-        E::from_interval(Interval::new(best_lo, top_range.hi))
-    })
 }
 
 /// The least and the greatest of a few enclosures, each range taken once

@@ -356,6 +356,14 @@ impl<const K: usize> Enclosure for Taylor<K> {
         (a, self.c[1])
     }
 
+    fn between(lower: (f64, f64), upper: (f64, f64)) -> Taylor<K> {
+        let (c0, c1, r) = super::affine::middle_line(lower, upper);
+        let mut c = [0.0; K];
+        c[0] = c0;
+        c[1] = c1;
+        Taylor::checked(c, r)
+    }
+
     fn widen(self, radius: f64) -> Taylor<K> {
         Taylor::checked(self.c, add_up(self.r, radius))
     }

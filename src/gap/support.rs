@@ -29,8 +29,8 @@
 //! then taken as `√(|d|² − d_y²)`, one square instead of two, and the
 //! border's `|d|` costs nothing.
 
-use crate::enclosure::rounding::{bound, up};
-use crate::enclosure::{Enclosure, Interval, greatest};
+use crate::enclosure::rounding::up;
+use crate::enclosure::{Enclosure, Interval, middle_line};
 use crate::error::{CcdError, check_finite};
 use crate::motion::{column, row};
 use nalgebra::{Matrix3, Vector3};
@@ -188,7 +188,7 @@ impl Convex {
             Core::Point => E::zero(),
             Core::Cuboid(e) => E::dot_f64([d.x.abs(), d.y.abs(), d.z.abs()], [e.x, e.y, e.z]),
             Core::Segment([a, b]) => dot(d, a).max(dot(d, b)),
-            Core::Triangle(vs) => highest(vs.iter().map(|v| dot(d, v))),
+            Core::Triangle(vs) => polyhedron_support(vs, d),
             Core::Polyhedron(vs) => polyhedron_support(vs, d),
             Core::Cylinder {
                 half_height,
@@ -314,49 +314,57 @@ fn radial<E: Enclosure>(d: &Vector3<E>, norm: f64) -> E {
         .unwrap_or(E::constant(norm))
 }
 
-/// The greatest of some vertex products (see [`greatest`]); should there
-/// be none, the whole line.
-fn highest<E: Enclosure>(products: impl Iterator<Item = E>) -> E {
-    greatest(products).unwrap_or(E::constant(f64::INFINITY))
-}
-
-/// `max_v v·d` over the vertices. Vertices that an interval bound shows to
-/// be below another vertex's lower bound are skipped: they can never be the
-/// maximum on this node, and skipping them keeps the enclosure affine.
+/// `max_v v·d` over the vertices, from lines: over the node each
+/// component of `d` lies within a radius of a line (its enclosure's
+/// `linear_lower` and `linear_upper`), so each `v·d` lies between two
+/// lines, and the greatest of them lies below the chord of the greatest
+/// upper line between the node's ends (a greatest of lines is convex)
+/// and above any one vertex's lower line (the one highest mid-node is
+/// taken). Three plain dot products per vertex, where an enclosed dot
+/// product and its range cost several times as much (this runs for every
+/// vertex on every node); and where the farthest vertex changes over the
+/// node the bound keeps a slope, where the greatest of the vertices'
+/// enclosures fell back to a range.
 fn polyhedron_support<E: Enclosure>(vs: &[Vector3<f64>], d: &Vector3<E>) -> E {
-    if vs.len() <= 4 {
-        return highest(vs.iter().map(|v| dot(d, v)));
+    if vs.is_empty() {
+        return E::constant(f64::INFINITY);
     }
-    // `d` over the node as a centre `c` and a radius `r` per component:
-    // then `v·d` lies within `c·v ± r·|v|`, two plain dot products per
-    // vertex (interval products, with their outward roundings, cost three
-    // times as much, and this runs for every vertex on every node).
-    let ranges = [d.x.range(), d.y.range(), d.z.range()];
-    let c = ranges.map(|i| 0.5 * i.lo + 0.5 * i.hi);
-    let r = [0, 1, 2].map(|k| bound((c[k] - ranges[k].lo).max(ranges[k].hi - c[k])));
-    let reach = |v: &Vector3<f64>| {
-        let (a, b, e) = (c[0] * v.x, c[1] * v.y, c[2] * v.z);
-        let mid = a + b + e;
-        let spread = r[0] * v.x.abs() + r[1] * v.y.abs() + r[2] * v.z.abs();
-        // The roundings of both sums and of the final ± (far fewer than
-        // eight ulps of the terms' sizes).
-        let slack = 8.0 * f64::EPSILON * (a.abs() + b.abs() + e.abs() + spread) + f64::MIN_POSITIVE;
-        (mid - spread - slack, mid + spread + slack)
-    };
-    let best_lo = vs
-        .iter()
-        .map(|v| reach(v).0)
-        .fold(f64::NEG_INFINITY, f64::max);
-    // A NaN-free bound always keeps the vertex that set `best_lo` (a NaN
-    // bound keeps its vertex too).
-    highest(
-        vs.iter()
-            .filter(|v| {
-                let hi = reach(v).1;
-                hi >= best_lo || hi.is_nan()
-            })
-            .map(|v| dot(d, v)),
-    )
+    // `d`'s components as `c + s·e ± r`.
+    let [(c0, s0, r0), (c1, s1, r1), (c2, s2, r2)] =
+        [d.x, d.y, d.z].map(|k| middle_line(k.linear_lower(), k.linear_upper()));
+    // Per vertex `v·d ∈ a + b·e ± rho`; the chord's ends (the greatest
+    // upper line at `e = ±1`) and the lower line highest at `e = 0`.
+    let (mut top_plus, mut top_minus) = (f64::NEG_INFINITY, f64::NEG_INFINITY);
+    let mut low = (f64::NEG_INFINITY, 0.0);
+    let mut finite = true;
+    for v in vs {
+        let (ac, bc, ec) = (v.x * c0, v.y * c1, v.z * c2);
+        let (as_, bs, es) = (v.x * s0, v.y * s1, v.z * s2);
+        let (a, b) = (ac + bc + ec, as_ + bs + es);
+        let rho = v.x.abs() * r0 + v.y.abs() * r1 + v.z.abs() * r2;
+        // The roundings of the three sums and of the lines below (each
+        // under a half-ulp of terms these magnitudes bound).
+        let terms = ac.abs() + bc.abs() + ec.abs() + as_.abs() + bs.abs() + es.abs();
+        let rho = rho + 8.0 * f64::EPSILON * (terms + rho) + f64::MIN_POSITIVE;
+        let (plus, minus, mid) = (a + b + rho, a - b + rho, a - rho);
+        finite &= (plus + minus + mid).is_finite();
+        top_plus = top_plus.max(plus);
+        top_minus = top_minus.max(minus);
+        if mid > low.0 {
+            low = (mid, b);
+        }
+    }
+    if !finite {
+        return E::from_interval(Interval::ENTIRE);
+    }
+    // The chord through `(−1, top_minus)` and `(1, top_plus)`, raised by
+    // the roundings of its centre and slope.
+    let slack = 2.0 * f64::EPSILON * (top_plus.abs() + top_minus.abs());
+    let chord = (
+        0.5 * (top_plus + top_minus) + slack,
+        0.5 * (top_plus - top_minus),
+    );
+    E::between(low, chord)
 }
 
 /// Our shapes as parry3d-f64's GJK sees them (the direction of a narrow
@@ -371,34 +379,75 @@ impl parry3d_f64::shape::SupportMap for Convex {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::enclosure::Affine;
+    use crate::enclosure::{Affine, Taylor2};
     use proptest::prelude::*;
 
     proptest! {
-        /// A hull's reach along a direction that moves over the node
-        /// (`d = c + s·e`, `e ∈ [−1, 1]`) bounds the farthest vertex at
-        /// every `e`: the vertices skipped as never the farthest really are
-        /// never the farthest.
+        /// A hull's or triangle's reach along a direction that moves over
+        /// the node (`d = c + s·e ± r` per component, `e ∈ [−1, 1]`) holds
+        /// the farthest vertex at every `e` and every direction within
+        /// the radii (the corners of that box: the farthest vertex is
+        /// convex in the direction), from above and from below, in every
+        /// arithmetic.
         #[test]
-        fn the_hull_reach_bounds_the_farthest_vertex_at_every_time(
-            vertices in prop::collection::vec(prop::array::uniform3(-1.0f64..1.0), 5..24),
+        fn the_polytope_reach_holds_the_farthest_vertex_at_every_time(
+            vertices in prop::collection::vec(prop::array::uniform3(-1.0f64..1.0), 1..24),
             scale in -3i32..4,
             centre in prop::array::uniform3(-10.0f64..10.0),
             slopes in prop::array::uniform3(prop_oneof![Just(0.0f64), -2.0f64..2.0]),
+            radii in prop::array::uniform3(prop_oneof![Just(0.0f64), 0.0f64..0.5]),
         ) {
             let vs: Vec<Vector3<f64>> = vertices
                 .iter()
                 .map(|v| Vector3::from(*v) * 10f64.powi(scale))
                 .collect();
-            let d = Vector3::from_fn(|k, _| Affine { c: centre[k], s: slopes[k], r: 0.0 });
-            let reach = polyhedron_support(&vs, &d);
+            let farthest = |x: &Vector3<f64>| {
+                vs.iter().map(|v| v.dot(x)).fold(f64::NEG_INFINITY, f64::max)
+            };
+            // The reach from each arithmetic, as its bounds at `e`.
+            let affine = polyhedron_support(
+                &vs,
+                &Vector3::from_fn(|k, _| Affine { c: centre[k], s: slopes[k], r: radii[k] }),
+            );
+            let taylor = polyhedron_support(
+                &vs,
+                &Vector3::from_fn(|k, _| Taylor2 { c: [centre[k], slopes[k], 0.0], r: radii[k] }),
+            );
+            let interval = polyhedron_support(
+                &vs,
+                &Vector3::from_fn(|k, _| {
+                    let reach = slopes[k].abs() + radii[k];
+                    Interval::new(centre[k] - reach, centre[k] + reach)
+                }),
+            );
+            let bounds: [(&str, Box<dyn Fn(f64) -> (f64, f64)>); 3] = [
+                ("affine", Box::new(|e| {
+                    let mid = affine.c + affine.s * e;
+                    (mid - affine.r, mid + affine.r)
+                })),
+                ("taylor", Box::new(|e| {
+                    let mid = taylor.c[0] + taylor.c[1] * e + taylor.c[2] * e * e;
+                    (mid - taylor.r, mid + taylor.r)
+                })),
+                ("interval", Box::new(|_| (interval.lo, interval.hi))),
+            ];
             for i in 0..=64 {
                 let e = -1.0 + i as f64 / 32.0;
-                let x = Vector3::from_fn(|k, _| centre[k] + slopes[k] * e);
-                let farthest = vs.iter().map(|v| v.dot(&x)).fold(f64::NEG_INFINITY, f64::max);
-                let at = reach.c + reach.s * e + reach.r;
-                let rounding = 1.0e-12 * (1.0 + farthest.abs());
-                prop_assert!(farthest <= at + rounding, "e {e}: {farthest} > {at}");
+                for corner in 0..8 {
+                    let x = Vector3::from_fn(|k, _| {
+                        let side = if corner >> k & 1 == 1 { 1.0 } else { -1.0 };
+                        centre[k] + slopes[k] * e + side * radii[k]
+                    });
+                    let reach = farthest(&x);
+                    let rounding = 1.0e-12 * (1.0 + reach.abs());
+                    for (name, at) in &bounds {
+                        let (lo, hi) = at(e);
+                        prop_assert!(
+                            lo - rounding <= reach && reach <= hi + rounding,
+                            "{name}, e {e}: {reach} not in [{lo}, {hi}]"
+                        );
+                    }
+                }
             }
         }
 
