@@ -420,17 +420,15 @@ mod tests {
                     Interval::new(centre[k] - reach, centre[k] + reach)
                 }),
             );
-            let bounds: [(&str, Box<dyn Fn(f64) -> (f64, f64)>); 3] = [
-                ("affine", Box::new(|e| {
-                    let mid = affine.c + affine.s * e;
-                    (mid - affine.r, mid + affine.r)
-                })),
-                ("taylor", Box::new(|e| {
-                    let mid = taylor.c[0] + taylor.c[1] * e + taylor.c[2] * e * e;
-                    (mid - taylor.r, mid + taylor.r)
-                })),
-                ("interval", Box::new(|_| (interval.lo, interval.hi))),
-            ];
+            // Each arithmetic's bounds at `e`.
+            let bounds = |e: f64| {
+                let (a, t) = (affine.c + affine.s * e, taylor.c[0] + taylor.c[1] * e + taylor.c[2] * e * e);
+                [
+                    ("affine", a - affine.r, a + affine.r),
+                    ("taylor", t - taylor.r, t + taylor.r),
+                    ("interval", interval.lo, interval.hi),
+                ]
+            };
             for i in 0..=64 {
                 let e = -1.0 + i as f64 / 32.0;
                 for corner in 0..8 {
@@ -440,8 +438,7 @@ mod tests {
                     });
                     let reach = farthest(&x);
                     let rounding = 1.0e-12 * (1.0 + reach.abs());
-                    for (name, at) in &bounds {
-                        let (lo, hi) = at(e);
+                    for (name, lo, hi) in bounds(e) {
                         prop_assert!(
                             lo - rounding <= reach && reach <= hi + rounding,
                             "{name}, e {e}: {reach} not in [{lo}, {hi}]"
