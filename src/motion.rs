@@ -548,6 +548,26 @@ impl Motion {
         padded(linear + self.turning_chord(radius) + other.turning_chord(other_radius))
     }
 
+    /// [`Self::relative_speed_bound`] along the unit direction `n` (world
+    /// axes): how fast `n·(p − q)` changes at every time of the step,
+    /// metres per step. The centres' relative velocity along `n`, and each
+    /// point's turning velocity `θ × r` along `n`, which is `r·(n × θ)`:
+    /// at most `ρ·|n × θ|`. A spin about an axis near `n` barely moves
+    /// the shapes along it.
+    pub fn relative_speed_along(
+        &self,
+        n: &Vector3<f64>,
+        radius: f64,
+        other: &Motion,
+        other_radius: f64,
+    ) -> f64 {
+        let linear = (self.displacement - other.displacement).dot(n).abs()
+            + 2.0 * (self.bend - other.bend).dot(n).abs();
+        let turning =
+            |m: &Motion, radius: f64| padded((m.arm.norm() + radius) * n.cross(&m.rotation).norm());
+        padded(padded(linear) + turning(self, radius) + turning(other, other_radius))
+    }
+
     /// An upper bound on how fast a point within `radius` of this frame's
     /// origin and a point within `other_radius` of `other`'s move against
     /// each other, metres per step (per unit of `τ`), at every time of the

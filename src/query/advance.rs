@@ -92,6 +92,11 @@ pub(super) fn apart_until(
         // the skin until `tau + clear/speed`, less `STALL`.
         let step_along = |n: &Vector3<f64>| {
             let clear = down(at.gap_along(n, &ca, &cb) - skin);
+            let along = pa.rotation * n;
+            let speed = a
+                .motion
+                .relative_speed_along(&along, reach_a, &b.motion, reach_b)
+                .min(speed);
             down(down(clear / speed) * (1.0 - 1.0e-12)) - STALL
         };
         let mut step = last.as_ref().map_or(f64::NEG_INFINITY, step_along);
