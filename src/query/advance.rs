@@ -49,8 +49,11 @@ const TURNING: f64 = 3.0;
 const STALL: f64 = 1.0 / 1024.0;
 
 /// A step along the last direction shorter than this share of the step
-/// asks GJK for a better one.
-const RETRY: f64 = 2.0 * STALL;
+/// asks GJK for a better one. Measured on the box–triangle cases at
+/// 200–1000 rad/s (with the speed along the direction): 4·`STALL` spares
+/// the most (2·: 2 % more instructions and time; 8·: 1.5 % more
+/// instructions).
+const RETRY: f64 = 4.0 * STALL;
 
 /// The most advancement steps for one pair.
 const MOST_STEPS: u64 = 64;
