@@ -92,7 +92,14 @@ impl BallTriangle {
         if axes >> 5 & 1 == 1 {
             // The adaptive direction `w`, from the triangle towards the
             // centre's closest point at the node's middle.
-            let f = self.corners.map(|v| v.map(E::constant));
+            // Written out: `array::map` here was left a loop over a
+            // partly initialised array in some builds.
+            let [c0, c1, c2] = &self.corners;
+            let f = [
+                c0.map(E::constant),
+                c1.map(E::constant),
+                c2.map(E::constant),
+            ];
             let w = self.direction(span, a, b);
             out[5] = vertex_face_adaptive(&centre, &f, self.reach, w.as_ref());
         }
