@@ -26,6 +26,7 @@ impl BallBall {
         }
     }
 
+    #[inline(never)]
     pub fn eval<E: Enclosure>(
         &self,
         _span: TimeSpan,

@@ -40,6 +40,7 @@ impl BallCuboid {
         }
     }
 
+    #[inline(never)]
     pub fn eval<E: Enclosure>(
         &self,
         _span: TimeSpan,

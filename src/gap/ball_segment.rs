@@ -37,6 +37,7 @@ impl BallSegment {
     }
 
     /// `a` is the ball, `b` the segment's frame.
+    #[inline(never)]
     pub fn eval<E: Enclosure>(
         &self,
         span: TimeSpan,

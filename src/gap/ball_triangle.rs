@@ -73,6 +73,7 @@ impl BallTriangle {
         }
     }
 
+    #[inline(never)]
     pub fn eval<E: Enclosure>(
         &self,
         span: TimeSpan,

@@ -57,6 +57,7 @@ impl CuboidCuboid {
         }
     }
 
+    #[inline(never)]
     pub fn eval<E: Enclosure>(
         &self,
         a: &Side<E>,

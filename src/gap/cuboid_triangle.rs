@@ -53,6 +53,7 @@ impl CuboidTriangle {
     }
 
     /// `a` is the cuboid, `b` the triangle.
+    #[inline(never)]
     pub fn eval<E: Enclosure>(
         &self,
         a: &Side<E>,

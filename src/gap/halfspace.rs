@@ -43,6 +43,7 @@ impl HalfSpaceConvex {
         }
     }
 
+    #[inline(never)]
     pub fn eval<E: Enclosure>(
         &self,
         _span: TimeSpan,

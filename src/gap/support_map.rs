@@ -595,6 +595,7 @@ impl SupportMap {
             .flatten()
     }
 
+    #[inline(never)]
     pub fn eval<E: Enclosure>(
         &self,
         span: TimeSpan,

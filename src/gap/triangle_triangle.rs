@@ -69,6 +69,7 @@ impl TriangleTriangle {
         }
     }
 
+    #[inline(never)]
     pub fn eval<E: Enclosure>(
         &self,
         span: TimeSpan,
