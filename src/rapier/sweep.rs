@@ -6,8 +6,8 @@ use super::backoff::{
     stop_after_contact, stop_when_deep,
 };
 use super::candidates::{
-    Candidate, FEW_PIECES, Interaction, MAX_PIECES, MeshPiece, gather, interaction, is_moving,
-    mesh_triangles, pose_path_box, swept_aabb,
+    Candidate, FEW_PIECES, Interaction, MAX_PIECES, MeshPiece, MovingBoxes, gather, gather_listed,
+    interaction, is_moving, mesh_triangles, pose_path_box, swept_aabb,
 };
 use super::moved::Moved;
 use super::report::CcdReport;
@@ -106,6 +106,8 @@ pub(crate) struct Workspace {
     /// The triangles a sweep splits meshes into (see [`earliest`]).
     triangles: Vec<MeshPiece>,
     pub motions: MotionCache,
+    /// The moved colliders' rough boxes, when few (see [`gather`]).
+    moving: MovingBoxes,
     /// The collider pairs the last step's clamps held at their start
     /// (moving collider, target), either way round (see [`HELD`]).
     held: HashSet<(ColliderHandle, ColliderHandle)>,
@@ -614,18 +616,34 @@ pub(crate) fn sweep_body(
         // nothing needs no motion (building one costs more than the query).
         let rough = ws.motions.rough(motions, h1, co1, scene.bodies);
         let cache = &mut ws.motions;
-        gather(
-            scene,
-            broad_phase,
-            dispatcher,
-            motions,
-            h1,
-            co1,
-            &rough,
-            |co2| targets.wants(co2, motions, scene),
-            |h2, co2| Some(cache.rough(motions, h2, co2, scene.bodies)),
-            &mut ws.candidates,
-        );
+        let wants = |co2: &Collider| targets.wants(co2, motions, scene);
+        let finds = match ws.moving.of(motions, scene, cache) {
+            Some(moving) => gather_listed(
+                scene,
+                broad_phase,
+                dispatcher,
+                motions,
+                h1,
+                co1,
+                &rough,
+                moving,
+                wants,
+                &mut ws.candidates,
+            ),
+            None => gather(
+                scene,
+                broad_phase,
+                dispatcher,
+                motions,
+                h1,
+                co1,
+                &rough,
+                wants,
+                |h2, co2| Some(cache.rough(motions, h2, co2, scene.bodies)),
+                &mut ws.candidates,
+            ),
+        };
+        ws.moving.found(finds);
         if ws.candidates.is_empty() {
             continue;
         }

@@ -269,6 +269,11 @@ impl<'a> StepMotions<'a> {
         }
     }
 
+    /// What tells this set from every other one (see [`MotionCache`]).
+    pub fn id(&self) -> u64 {
+        self.id
+    }
+
     pub fn body(&self, handle: RigidBodyHandle) -> Option<&Moved> {
         let i = *self.index.get(handle.into_raw_parts().0 as usize)?;
         self.moved.get(i as usize).filter(|m| m.handle == handle)
