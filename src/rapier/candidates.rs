@@ -299,6 +299,8 @@ pub(crate) fn gather(
         } else {
             Some(co2.compute_aabb())
         };
+        // `admit`, written out: through it this loop, the stage's commonest
+        // broad-phase walk, took 13 % more instructions in one build.
         let Some(bounds) = bounds.filter(|b| b.intersects(swept)) else {
             continue;
         };
