@@ -48,21 +48,6 @@ impl Affine {
     }
 }
 
-/// The line midway between `lower` and `upper` (each `(a, b)` for
-/// `a + b·e`) and how far either is from it over `e ∈ [−1, 1]` (at an end:
-/// the lines are straight), rounded up to cover the roundings of all
-/// three: `(centre, slope, radius)`.
-#[inline]
-pub(crate) fn middle_line(lower: (f64, f64), upper: (f64, f64)) -> (f64, f64, f64) {
-    let c = 0.5 * (lower.0 + upper.0);
-    let s = 0.5 * (lower.1 + upper.1);
-    let half = 0.5 * ((upper.0 - lower.0) + (upper.1 - lower.1).abs());
-    // Each of the three is off by at most three half-ulps of its terms,
-    // whose sizes the parts bound: four ulps of them cover it.
-    let r = bound(half.max(0.0) + (c.abs() + s.abs() + half.abs()) * (4.0 * f64::EPSILON));
-    (c, s, r)
-}
-
 impl Add for Affine {
     type Output = Affine;
     #[inline]
@@ -237,7 +222,7 @@ impl Enclosure for Affine {
 
     #[inline]
     fn between(lower: (f64, f64), upper: (f64, f64)) -> Affine {
-        let (c, s, r) = middle_line(lower, upper);
+        let (c, s, r) = super::middle_line(lower, upper);
         Affine::checked(c, s, r)
     }
 

@@ -41,7 +41,6 @@ pub(crate) mod series;
 mod taylor;
 
 pub use affine::Affine;
-pub(crate) use affine::middle_line;
 pub use interval::Interval;
 pub use taylor::{Taylor, Taylor2, Taylor3};
 
@@ -279,6 +278,22 @@ pub trait Enclosure:
     /// it was computed on (`to ⊆ from`): its local symbol becomes `to`'s.
     /// Intervals do not depend on the symbol and come back unchanged.
     fn restrict(self, from: TimeSpan, to: TimeSpan) -> Self;
+}
+
+/// The line midway between `lower` and `upper` (each `(a, b)` for
+/// `a + b·e`) and how far either is from it over `e ∈ [−1, 1]` (at an end:
+/// the lines are straight), rounded up to cover the roundings of all
+/// three: `(centre, slope, radius)`.
+#[inline]
+pub(crate) fn middle_line(lower: (f64, f64), upper: (f64, f64)) -> (f64, f64, f64) {
+    let c = 0.5 * (lower.0 + upper.0);
+    let s = 0.5 * (lower.1 + upper.1);
+    let half = 0.5 * ((upper.0 - lower.0) + (upper.1 - lower.1).abs());
+    // Each of the three is off by at most three half-ulps of its terms,
+    // whose sizes the parts bound: four ulps of them cover it.
+    let r =
+        rounding::bound(half.max(0.0) + (c.abs() + s.abs() + half.abs()) * (4.0 * f64::EPSILON));
+    (c, s, r)
 }
 
 /// The least and the greatest of a few enclosures, each range taken once

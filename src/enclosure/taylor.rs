@@ -357,7 +357,7 @@ impl<const K: usize> Enclosure for Taylor<K> {
     }
 
     fn between(lower: (f64, f64), upper: (f64, f64)) -> Taylor<K> {
-        let (c0, c1, r) = super::affine::middle_line(lower, upper);
+        let (c0, c1, r) = super::middle_line(lower, upper);
         let mut c = [0.0; K];
         c[0] = c0;
         c[1] = c1;

@@ -188,8 +188,8 @@ impl Convex {
             Core::Point => E::zero(),
             Core::Cuboid(e) => E::dot_f64([d.x.abs(), d.y.abs(), d.z.abs()], [e.x, e.y, e.z]),
             Core::Segment([a, b]) => dot(d, a).max(dot(d, b)),
-            Core::Triangle(vs) => polyhedron_support(vs, d),
-            Core::Polyhedron(vs) => polyhedron_support(vs, d),
+            Core::Triangle(vs) => vertex_reach(vs, d),
+            Core::Polyhedron(vs) => vertex_reach(vs, d),
             Core::Cylinder {
                 half_height,
                 radius,
@@ -325,7 +325,7 @@ fn radial<E: Enclosure>(d: &Vector3<E>, norm: f64) -> E {
 /// vertex on every node); and where the farthest vertex changes over the
 /// node the bound keeps a slope, where the greatest of the vertices'
 /// enclosures fell back to a range.
-fn polyhedron_support<E: Enclosure>(vs: &[Vector3<f64>], d: &Vector3<E>) -> E {
+fn vertex_reach<E: Enclosure>(vs: &[Vector3<f64>], d: &Vector3<E>) -> E {
     if vs.is_empty() {
         return E::constant(f64::INFINITY);
     }
@@ -405,15 +405,15 @@ mod tests {
                 vs.iter().map(|v| v.dot(x)).fold(f64::NEG_INFINITY, f64::max)
             };
             // The reach from each arithmetic, as its bounds at `e`.
-            let affine = polyhedron_support(
+            let affine = vertex_reach(
                 &vs,
                 &Vector3::from_fn(|k, _| Affine { c: centre[k], s: slopes[k], r: radii[k] }),
             );
-            let taylor = polyhedron_support(
+            let taylor = vertex_reach(
                 &vs,
                 &Vector3::from_fn(|k, _| Taylor2 { c: [centre[k], slopes[k], 0.0], r: radii[k] }),
             );
-            let interval = polyhedron_support(
+            let interval = vertex_reach(
                 &vs,
                 &Vector3::from_fn(|k, _| {
                     let reach = slopes[k].abs() + radii[k];

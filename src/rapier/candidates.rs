@@ -262,8 +262,10 @@ impl MovingBoxes {
 /// The colliders the fast collider `(h1, co1)` with swept box `swept` may
 /// meet, of those `wanted`, with how each pair is handled
 /// ([`interaction`]) and the box each was found with: a moving one's from
-/// `own_box`, any other's its own. Returns how many moving colliders the
-/// enlarged box found (for [`MovingBoxes::found`]).
+/// `own_box`, any other's its own. Returns how many moving colliders of
+/// those `wanted` the enlarged box found (for [`MovingBoxes::found`];
+/// [`gather_listed`] counts the listed ones within it whether wanted or
+/// not, which only steers the choice of the next set's way).
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn gather(
     scene: &StageWorld,

@@ -106,7 +106,8 @@ pub(crate) struct Workspace {
     /// The triangles a sweep splits meshes into (see [`earliest`]).
     triangles: Vec<MeshPiece>,
     pub motions: MotionCache,
-    /// The moved colliders' rough boxes, when few (see [`gather`]).
+    /// The moved colliders' rough boxes, when sweeps take them from a
+    /// list (see [`MovingBoxes`]).
     moving: MovingBoxes,
     /// The collider pairs the last step's clamps held at their start
     /// (moving collider, target), either way round (see [`HELD`]).
