@@ -263,6 +263,51 @@ impl Convex {
         }
     }
 
+    /// Whether the point `p` (in the shape's frame) lies in the shape, in
+    /// plain `f64`: a witness that two shapes overlap (a point in both), not
+    /// a bound, so a point within rounding of the surface may go either way.
+    /// `false` for the shapes with no test written here (hulls, triangles,
+    /// rounded cylinders and cones): they are asked by GJK instead.
+    pub fn contains(&self, p: &Vector3<f64>) -> bool {
+        let r = self.border;
+        match &self.core {
+            Core::Point => p.norm_squared() <= r * r,
+            Core::Cuboid(e) => {
+                let out = (p.abs() - e).sup(&Vector3::zeros());
+                out.norm_squared() <= r * r
+            }
+            Core::Segment([a, b]) => {
+                let ab = b - a;
+                let along = (p - a).dot(&ab) / ab.norm_squared().max(f64::MIN_POSITIVE);
+                let nearest = a + ab * along.clamp(0.0, 1.0);
+                (p - nearest).norm_squared() <= r * r
+            }
+            Core::Cylinder {
+                half_height,
+                radius,
+            } if r == 0.0 => p.y.abs() <= *half_height && p.x * p.x + p.z * p.z <= radius * radius,
+            // The radius shrinks linearly from the base (`-half_height`) to
+            // the apex (`+half_height`).
+            Core::Cone {
+                half_height,
+                radius,
+            } if r == 0.0 => {
+                p.y.abs() <= *half_height
+                    && p.x.hypot(p.z) * (2.0 * half_height) <= radius * (half_height - p.y)
+            }
+            _ => false,
+        }
+    }
+
+    /// Whether [`Self::contains`] has a test for this shape.
+    pub fn tests_points(&self) -> bool {
+        match self.core {
+            Core::Point | Core::Cuboid(_) | Core::Segment(_) => true,
+            Core::Cylinder { .. } | Core::Cone { .. } => self.border == 0.0,
+            Core::Triangle(_) | Core::Polyhedron(_) => false,
+        }
+    }
+
     /// An upper bound of `|x|` over the shape (metres): how far it reaches
     /// from its frame's origin.
     pub fn extent(&self) -> f64 {
@@ -486,6 +531,53 @@ mod tests {
             for u in others.iter().map(|u| Vector3::from(*u)) {
                 let limit = shape.support_f64(&u) + 1.0e-12 * (1.0 + u.norm());
                 prop_assert!(p.dot(&u) <= limit, "{p:?} beyond the shape along {u:?}");
+            }
+        }
+
+        /// The point test takes in the shape and nothing else: a point it
+        /// takes in lies within the shape's reach along 32 directions (a
+        /// false "inside" would show a touch where the shapes are apart),
+        /// and a point a little inside the hull of the centre and the
+        /// farthest points along random directions is taken in. Shapes
+        /// with no test take in nothing.
+        #[test]
+        fn the_point_test_takes_in_the_shape_and_nothing_else(
+            kind in 0usize..6,
+            border in prop_oneof![Just(0.0f64), 0.0f64..0.3],
+            p in prop::array::uniform3(-1.2f64..1.2),
+            directions in prop::collection::vec(prop::array::uniform3(-1.0f64..1.0), 1..6),
+            weights in prop::collection::vec(0.0f64..1.0, 6),
+            others in prop::collection::vec(prop::array::uniform3(-1.0f64..1.0), 32),
+        ) {
+            let v = |x: f64, y: f64, z: f64| Vector3::new(x, y, z);
+            let (core, centre) = match kind {
+                0 => (Core::Point, v(0.0, 0.0, 0.0)),
+                1 => (Core::Cuboid(v(0.5, 0.2, 1.0)), v(0.0, 0.0, 0.0)),
+                2 => (Core::Segment([v(0.0, -0.4, 0.1), v(0.3, 0.4, -0.2)]), v(0.15, 0.0, -0.05)),
+                3 => (Core::Cylinder { half_height: 0.4, radius: 0.3 }, v(0.0, 0.0, 0.0)),
+                4 => (Core::Cone { half_height: 0.4, radius: 0.3 }, v(0.0, 0.0, 0.0)),
+                _ => (Core::Triangle([v(0.0, 0.0, 0.0), v(1.0, 0.2, 0.0), v(0.1, 0.9, 0.3)]), v(0.0, 0.0, 0.0)),
+            };
+            let shape = Convex { core, border };
+            let p = Vector3::from(p);
+            if shape.contains(&p) {
+                prop_assert!(shape.tests_points());
+                for u in others.iter().map(|u| Vector3::from(*u)) {
+                    let reach = shape.support_f64(&u) + 1.0e-12;
+                    prop_assert!(p.dot(&u) <= reach, "{p:?} taken in, beyond the shape along {u:?}");
+                }
+            }
+            // A point and a segment need a border to have an inside.
+            let solid = shape.tests_points() && (kind >= 1 && kind != 2 || border > 0.0);
+            if solid {
+                let mut sum = 0.0;
+                let mut hull = Vector3::zeros();
+                for (d, w) in directions.iter().zip(&weights) {
+                    hull += shape.support_point(&Vector3::from(*d)) * *w;
+                    sum += w;
+                }
+                let inner = if sum > 0.0 { centre + (hull / sum - centre) * 0.999 } else { centre };
+                prop_assert!(shape.contains(&inner), "{inner:?} not taken in");
             }
         }
     }
