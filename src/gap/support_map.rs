@@ -222,10 +222,8 @@ impl SupportMap {
         match kept {
             Some((simplex, old12)) => {
                 let mut simplex = simplex.clone();
-                let back = old12.inverse();
-                simplex.modify_pnts(&|p| {
-                    *p = CsoPoint::new(p.orig1, *pos12 * (back * p.orig2));
-                });
+                let shift = *pos12 * old12.inverse();
+                simplex.modify_pnts(&|p| *p = CsoPoint::new(p.orig1, shift * p.orig2));
                 simplex
             }
             None => {
@@ -616,14 +614,7 @@ impl SupportMap {
             let mut kept = self.warm.borrow_mut().take();
             let last = kept.as_ref().and_then(|w| w.f64.as_ref());
             let found_last = last.and_then(|w| w.2);
-            let warm = last.map(|(simplex, old12, _)| {
-                let mut simplex = simplex.clone();
-                let back = old12.inverse();
-                simplex.modify_pnts(&|p| {
-                    *p = Cso64::new(p.orig1, pos12 * (back * p.orig2));
-                });
-                simplex
-            });
+            let warm = last.map(|(simplex, old12, _)| carried(simplex, old12, &pos12));
             // parry's GJK can end on a tetrahedron that holds the origin
             // and still answer the closest points (its tetrahedron case with
             // a positive lower bound); started from that one, it answers
@@ -800,6 +791,16 @@ impl SupportMap {
             out[slot] = in_b(&if f.dot(&k) >= 0.0 { f } else { -f });
         }
     }
+}
+
+/// `simplex`, found at the relative pose `old12`, carried to `pos12`: its
+/// vertices are differences of points of the two shapes, kept in `a`'s
+/// frame, so `b`'s points move with `b`'s pose.
+fn carried(simplex: &Simplex64, old12: &Pose64, pos12: &Pose64) -> Simplex64 {
+    let mut simplex = simplex.clone();
+    let shift = *pos12 * old12.inverse();
+    simplex.modify_pnts(&|p| *p = Cso64::new(p.orig1, shift * p.orig2));
+    simplex
 }
 
 /// The closest points of two cores with a closed form (points, segments,

@@ -171,8 +171,9 @@ impl Closest {
         let pos12 = pose64_from_iso(rel);
         let mut simplex = match self.warm.take() {
             Some((mut simplex, old12)) => {
-                let back = old12.inverse();
-                simplex.modify_pnts(&|p| *p = CsoPoint::new(p.orig1, pos12 * (back * p.orig2)));
+                // `b`'s points, kept in `a`'s frame, move with `b`'s pose.
+                let shift = pos12 * old12.inverse();
+                simplex.modify_pnts(&|p| *p = CsoPoint::new(p.orig1, shift * p.orig2));
                 simplex
             }
             None => {
