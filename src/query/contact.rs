@@ -91,27 +91,42 @@ pub(crate) fn contact_settled(
     }))
 }
 
-/// The contact of a posed capsule and box (either order) from the closest
-/// points of the capsule's segment and the box, in closed form
+/// The contact of a posed capsule or cylinder and a box (either order)
+/// from the closest points of its axis segment and the box, in closed form
 /// (`crate::gap::segment_box`, in `f64`), where parry would run GJK (whose
 /// distance stops up to millimetres above the true one): the witness of a
-/// capsule query's reported time, an eighth of its cost. `None` for other
-/// pairs, and when the segment meets the box (parry's EPA measures that
-/// depth); `Some(None)` when they are farther apart than `prediction`.
+/// capsule query's reported time, an eighth of its cost (a cylinder's, a
+/// fifth: 16 k instructions of parry's GJK on its curved side). `None` for
+/// other pairs, when the segment meets the box (parry's EPA measures that
+/// depth), and for a cylinder overlapping the box or whose closest points
+/// are not beside its axis; `Some(None)` when they are farther apart than
+/// `prediction`.
 ///
 /// The stage's contact samples keep parry's contact: rapier's contacts
 /// and its own CCD see parry's numbers, and the stage's hand-back rules
 /// are written against them.
-fn capsule_cuboid(
+fn round_cuboid(
     pose1: &Pose,
     g1: &dyn Shape,
     pose2: &Pose,
     g2: &dyn Shape,
     prediction: f64,
 ) -> Option<Option<Contact>> {
-    let (capsule, cuboid, capsule_first) = match (g1.as_capsule(), g2.as_cuboid()) {
-        (Some(c), Some(b)) => (c, b, true),
-        _ => (g2.as_capsule()?, g1.as_cuboid()?, false),
+    // The round shape's axis segment and radius, and whether it is a
+    // cylinder (whose closest points are the capsule's only beside the
+    // axis, see below).
+    let round = |g: &dyn Shape| match (g.as_capsule(), g.as_cylinder()) {
+        (Some(c), _) => Some(([c.segment.a, c.segment.b], c.radius, false)),
+        (_, Some(c)) => Some((
+            [-Vector::Y, Vector::Y].map(|y| y * c.half_height),
+            c.radius,
+            true,
+        )),
+        _ => None,
+    };
+    let ((ends, radius, cylinder), cuboid, capsule_first) = match (round(g1), g2.as_cuboid()) {
+        (Some(r), Some(b)) => (r, b, true),
+        _ => (round(g2)?, g1.as_cuboid()?, false),
     };
     let (capsule_pose, box_pose) = if capsule_first {
         (pose1, pose2)
@@ -121,8 +136,7 @@ fn capsule_cuboid(
     // The segment in the box's frame, where the box is axis-aligned.
     let box_iso = iso_from_pose(box_pose);
     let capsule_in_box = box_iso.inv_mul(&iso_from_pose(capsule_pose));
-    let segment = [capsule.segment.a, capsule.segment.b]
-        .map(|p| (capsule_in_box * point_from_glam(p)).coords);
+    let segment = ends.map(|p| (capsule_in_box * point_from_glam(p)).coords);
     let (on_segment, on_box) = gap::segment_box(&segment, &vec_from_glam(cuboid.half_extents));
     let between = on_box - on_segment;
     let core = between.norm();
@@ -131,8 +145,20 @@ fn capsule_cuboid(
     if core.is_nan() || core <= 1.0e-9 * scale {
         return None;
     }
-    let radius = f64::from(capsule.radius);
+    let radius = f64::from(radius);
     let dist = core - radius;
+    // A cylinder is the capsule's middle: where the box's point nearest its
+    // axis lies beside the axis (not past an end), the segment between them
+    // is square to the axis and leaves the cylinder through its side, so
+    // shapes apart have the capsule's closest points. Elsewhere, or
+    // overlapping, parry's.
+    if cylinder {
+        let along = segment[1] - segment[0];
+        let s = (on_segment - segment[0]).dot(&along) / along.norm_squared();
+        if !(s > 1.0e-9 && s < 1.0 - 1.0e-9 && dist > 0.0) {
+            return None;
+        }
+    }
     if dist > prediction {
         return Some(None);
     }
@@ -531,7 +557,7 @@ pub(super) fn describe(
     // At the reported time the shapes are about `skin` apart. A bounded
     // prediction keeps parry's composite contact to the mesh parts nearby
     // (an unbounded one visits every triangle); widen it only if needed.
-    let witness = capsule_cuboid(&pose1, shape1, &pose2, shape2, f64::INFINITY)
+    let witness = round_cuboid(&pose1, shape1, &pose2, shape2, f64::INFINITY)
         .flatten()
         .or_else(|| {
             [1.0e-2f32, 1.0, 1.0e2, f32::MAX]
@@ -667,7 +693,7 @@ mod tests {
                     (&capsule_pose, &capsule, &box_pose, &cuboid)
                 };
                 // Segments meeting the box are left to parry.
-                let Some(ours) = capsule_cuboid(p1, s1, p2, s2, f64::from(prediction)) else {
+                let Some(ours) = round_cuboid(p1, s1, p2, s2, f64::from(prediction)) else {
                     continue;
                 };
                 let parry =
@@ -721,6 +747,117 @@ mod tests {
             }
         }
         assert!(compared > 500, "only {compared} contacts compared");
+    }
+
+    /// A cylinder and a box: where the closed form answers (apart, the
+    /// box's point nearest the axis beside it), its distance is
+    /// parry3d-f64's, its points lie on the two surfaces with the
+    /// normal between them, and the normal is parry3d-f64's closest-points
+    /// normal; on 3,000 random poses, either order, about a fifth of those
+    /// apart are answered (the rest are seen past an end).
+    #[test]
+    fn cylinder_box_contacts_beside_the_axis_are_exact() {
+        use parry3d_f64::shape::{Cuboid as Cuboid64, Cylinder as Cylinder64};
+        use rapier3d::parry::shape::Cylinder;
+        let mut seed = 11u64;
+        let mut next = move || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (seed >> 40) as f32 / (1u64 << 24) as f32
+        };
+        let (mut apart, mut answered) = (0, 0);
+        for case in 0..3000 {
+            let cylinder = Cylinder::new(0.05 + 0.5 * next(), 0.02 + 0.3 * next());
+            let cuboid = Cuboid::new(Vector::new(0.05 + next(), 0.05 + next(), 0.05 + next()));
+            let wide = f64::from;
+            let cylinder64 = Cylinder64::new(wide(cylinder.half_height), wide(cylinder.radius));
+            let h = cuboid.half_extents;
+            let cuboid64 = Cuboid64::new(parry3d_f64::math::Vector::new(
+                wide(h.x),
+                wide(h.y),
+                wide(h.z),
+            ));
+            let turn = |next: &mut dyn FnMut() -> f32| {
+                let axis =
+                    Vector::new(next() - 0.5, next() - 0.5, next() - 0.5).normalize_or(Vector::Y);
+                Rotation::from_axis_angle(axis, 6.0 * next())
+            };
+            let at = Vector::new(3.0 * next() - 1.5, 3.0 * next() - 1.5, 3.0 * next() - 1.5);
+            let cylinder_pose = Pose::from_parts(at, turn(&mut next));
+            let box_pose = Pose::from_parts(Vector::ZERO, turn(&mut next));
+            let (c64, b64) = (
+                crate::convert::pose64_from_iso(&iso_from_pose(&cylinder_pose)),
+                crate::convert::pose64_from_iso(&iso_from_pose(&box_pose)),
+            );
+            let truth = parry3d_f64::query::contact(&c64, &cylinder64, &b64, &cuboid64, 10.0)
+                .unwrap()
+                .unwrap();
+            if truth.dist > 1.0e-6 {
+                apart += 1;
+            }
+            for flip in [false, true] {
+                let (p1, s1, p2, s2): (_, &dyn Shape, _, &dyn Shape) = if flip {
+                    (&box_pose, &cuboid, &cylinder_pose, &cylinder)
+                } else {
+                    (&cylinder_pose, &cylinder, &box_pose, &cuboid)
+                };
+                let Some(ours) = round_cuboid(p1, s1, p2, s2, f64::INFINITY) else {
+                    continue;
+                };
+                let ours = ours.expect("within an infinite prediction");
+                if !flip {
+                    answered += 1;
+                }
+                assert!(
+                    truth.dist > 0.0,
+                    "case {case}: answered overlapping, {}",
+                    truth.dist
+                );
+                let dist = f64::from(ours.dist);
+                // The poses are f32 (their quaternions unit to ~1e-7).
+                assert!(
+                    (dist - truth.dist).abs() < 1.0e-5,
+                    "case {case}: {dist} vs {}",
+                    truth.dist
+                );
+                let (on_cylinder, on_box, n) = if flip {
+                    (ours.point2, ours.point1, -ours.normal1)
+                } else {
+                    (ours.point1, ours.point2, ours.normal1)
+                };
+                let n64 = truth.normal1;
+                let agree =
+                    f64::from(n.x) * n64.x + f64::from(n.y) * n64.y + f64::from(n.z) * n64.z;
+                assert!(
+                    agree > 1.0 - 1.0e-6,
+                    "case {case} flip {flip}: normal {n:?} vs {n64:?}"
+                );
+                let gap = (on_box - on_cylinder).dot(n);
+                assert!(
+                    (f64::from(gap) - dist).abs() < 1.0e-4,
+                    "case {case}: {gap} vs {dist}"
+                );
+                // On the box's surface, and on the cylinder's side.
+                let in_box = box_pose.inverse_transform_point(on_box);
+                let out = (in_box.abs() - h).max_element();
+                assert!(out.abs() < 1.0e-4, "case {case}: {out} off the box");
+                let in_cylinder = cylinder_pose.inverse_transform_point(on_cylinder);
+                let off_axis = in_cylinder.x.hypot(in_cylinder.z) - cylinder.radius;
+                assert!(
+                    off_axis.abs() < 1.0e-4,
+                    "case {case}: {off_axis} off the side"
+                );
+                assert!(
+                    in_cylinder.y.abs() <= cylinder.half_height + 1.0e-4,
+                    "case {case}"
+                );
+            }
+        }
+        assert!(
+            apart > 1000 && answered > 300,
+            "{answered} of {apart} apart answered"
+        );
     }
 
     /// A cross of two boxes as one mesh, jammed into a wall box at random
