@@ -86,6 +86,10 @@ pub struct SolveOptions {
     pub span: TimeSpan,
     /// What to do with pairs that touch at the start of the span.
     pub initial_contact: InitialContact,
+    /// The caller knows every pair apart at the start of the span (it
+    /// proved them so, as the query's advancement does): the search makes
+    /// no check there.
+    pub start_apart: bool,
 }
 
 /// What the search does with pairs that already touch when it starts.
@@ -106,6 +110,7 @@ impl Default for SolveOptions {
             max_evaluations: 100_000,
             span: TimeSpan::STEP,
             initial_contact: InitialContact::Report,
+            start_apart: false,
         }
     }
 }
@@ -300,7 +305,7 @@ impl Solver {
         // Otherwise (a touch seen, whose confirmation may bracket the root;
         // a span no wider than `ε`) the check is made at once.
         let ignore = options.initial_contact == InitialContact::Ignore;
-        let mut start_open = root_node.span.lo <= span.lo;
+        let mut start_open = !options.start_apart && root_node.span.lo <= span.lo;
         let mut first = None;
         if !start_open {
             first = Some((root, root_node));

@@ -896,7 +896,9 @@ fn run_case(case: &Case, row: &mut Row, label: &str, index: usize) {
             // later report must sit where parry itself sees a touch.
             if toi.fraction > t + 1.0e-6 {
                 if gap(case, toi.fraction) <= case.noise
-                    || truth64(case).0.is_some_and(|t64| toi.fraction <= t64 + 1.0e-6)
+                    || truth64(case)
+                        .0
+                        .is_some_and(|t64| toi.fraction <= t64 + 1.0e-6)
                 {
                     row.late_within_noise += 1;
                 } else {

@@ -498,6 +498,15 @@ fn initial_contacts_are_reported_or_left_out() {
                 "{}",
                 got.time
             );
+            // A caller that vouches for every pair apart at the start gets
+            // no check there: the touch is searched for like any other.
+            let vouched = SolveOptions {
+                start_apart: true,
+                ..SolveOptions::default()
+            };
+            let got = solve_in(Arithmetic::Affine, &mut solver, &mut set, &vouched).unwrap();
+            assert_eq!(got.status, RootStatus::Hit);
+            assert!(got.time <= vouched.epsilon, "{}", got.time);
         }
     }
 }

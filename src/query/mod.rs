@@ -99,6 +99,7 @@ impl QueryOptions {
             max_evaluations: self.max_evaluations,
             span: self.time_range,
             initial_contact: self.initial_contact,
+            start_apart: false,
         };
         options.validate()?;
         Ok(options)
@@ -276,8 +277,12 @@ impl Query {
             self.spent.advances = advances;
             return Ok(None);
         }
+        // Advanced past the span's start, every pair is proved apart at
+        // the new start (each stops short of where its proof ends): the
+        // search need not check for pairs touching there.
         let solve_options = SolveOptions {
             span: TimeSpan::new(start, span.hi),
+            start_apart: start > span.lo,
             ..solve_options
         };
         let (outcome, hit) = options.arithmetic.dispatch(Search {
