@@ -548,24 +548,20 @@ impl Motion {
         padded(linear + self.turning_chord(radius) + other.turning_chord(other_radius))
     }
 
-    /// [`Self::relative_speed_bound`] along the unit direction `n` (world
-    /// axes): how fast `n·(p − q)` changes at every time of the step,
-    /// metres per step. The centres' relative velocity along `n`, and each
-    /// point's turning velocity `θ × r` along `n`, which is `r·(n × θ)`:
-    /// at most `ρ·|n × θ|`. A spin about an axis near `n` barely moves
-    /// the shapes along it.
+    /// [`Self::relative_speed_bound`] along a unit direction, for many
+    /// directions: see [`SpeedAlong`].
     pub fn relative_speed_along(
         &self,
-        n: &Vector3<f64>,
         radius: f64,
         other: &Motion,
         other_radius: f64,
-    ) -> f64 {
-        let linear = (self.displacement - other.displacement).dot(n).abs()
-            + 2.0 * (self.bend - other.bend).dot(n).abs();
-        let turning =
-            |m: &Motion, radius: f64| padded((m.arm.norm() + radius) * n.cross(&m.rotation).norm());
-        padded(padded(linear) + turning(self, radius) + turning(other, other_radius))
+    ) -> SpeedAlong {
+        let reach = |m: &Motion, radius: f64| (m.arm.norm() + radius, m.rotation);
+        SpeedAlong {
+            linear: self.displacement - other.displacement,
+            bend: self.bend - other.bend,
+            turns: [reach(self, radius), reach(other, other_radius)],
+        }
     }
 
     /// An upper bound on how fast a point within `radius` of this frame's
@@ -746,6 +742,33 @@ impl Motion {
 /// (eight ulps and the smallest normal).
 fn padded(x: f64) -> f64 {
     x * (1.0 + 8.0 * f64::EPSILON) + f64::MIN_POSITIVE
+}
+
+/// How fast two points within given radii of two frames' origins move
+/// against each other along a unit direction `n` (world axes), at every
+/// time of the step, metres per step ([`Motion::relative_speed_along`]):
+/// the centres' relative velocity along `n`, and each point's turning
+/// velocity `θ × r` along `n`, which is `r·(n × θ)`: at most `ρ·|n × θ|`.
+/// A spin about an axis near `n` barely moves the shapes along it. What
+/// does not depend on `n` is taken once (conservative advancement asks
+/// along a new direction each step).
+#[derive(Clone, Copy, Debug)]
+pub struct SpeedAlong {
+    linear: Vector3<f64>,
+    bend: Vector3<f64>,
+    /// Each side's reach from its turning axis (`|arm| + radius`) and its
+    /// rotation vector.
+    turns: [(f64, Vector3<f64>); 2],
+}
+
+impl SpeedAlong {
+    /// The bound along the unit direction `n`.
+    pub fn at(&self, n: &Vector3<f64>) -> f64 {
+        let linear = self.linear.dot(n).abs() + 2.0 * self.bend.dot(n).abs();
+        let turning =
+            |(reach, rotation): (f64, Vector3<f64>)| padded(reach * n.cross(&rotation).norm());
+        padded(padded(linear) + turning(self.turns[0]) + turning(self.turns[1]))
+    }
 }
 
 /// Of the rotation vectors `axis·(angle + 2πn)` that give the same rotation

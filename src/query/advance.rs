@@ -78,6 +78,7 @@ pub(super) fn apart_until(
     // A hull's extent is a walk over its vertices: taken once.
     let (reach_a, reach_b) = (ca.extent(), cb.extent());
     let speed = a.motion.relative_speed_bound(reach_a, &b.motion, reach_b);
+    let speed_along = a.motion.relative_speed_along(reach_a, &b.motion, reach_b);
     if !(speed > 0.0 && speed.is_finite()) {
         return (lo, 0);
     }
@@ -96,10 +97,7 @@ pub(super) fn apart_until(
         let step_along = |n: &Vector3<f64>| {
             let clear = down(at.gap_along(n, &ca, &cb) - skin);
             let along = pa.rotation * n;
-            let speed = a
-                .motion
-                .relative_speed_along(&along, reach_a, &b.motion, reach_b)
-                .min(speed);
+            let speed = speed_along.at(&along).min(speed);
             down(down(clear / speed) * (1.0 - 1.0e-12)) - STALL
         };
         let mut step = last.as_ref().map_or(f64::NEG_INFINITY, step_along);
