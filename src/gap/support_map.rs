@@ -274,6 +274,18 @@ impl SupportMap {
     /// the shapes' own least-overlap axis, or parry's contact).
     fn parry_direction(&self, rel: Isometry3<f64>, width: f64) -> (Vector3<f64>, Option<f64>) {
         let (depth, coarse) = (width > 0.0, width > COARSE_NODE);
+        // A narrow node of a curved pair that overlaps at its middle takes
+        // the last direction (below): a point in both shapes tells that
+        // without GJK.
+        if depth
+            && !coarse
+            && self.curved
+            && self.witnesses
+            && let Some(last) = self.last.get()
+            && self.overlap_witnessed(&rel)
+        {
+            return (last, None);
+        }
         if width > 0.0
             && width < NARROW_NODE
             && self.curved
