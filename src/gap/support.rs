@@ -466,6 +466,36 @@ mod tests {
     use crate::enclosure::{Affine, Taylor2};
     use proptest::prelude::*;
 
+    /// One core of each kind, by `kind` in `0..7`: a point, a box, a
+    /// segment, a triangle, a tetrahedron's hull, a cylinder and a cone
+    /// (half-height 0.4, radius 0.3).
+    fn sample_core(kind: usize) -> Core {
+        let v = |x: f64, y: f64, z: f64| Vector3::new(x, y, z);
+        match kind {
+            0 => Core::Point,
+            1 => Core::Cuboid(v(0.5, 0.2, 1.0)),
+            2 => Core::Segment([v(0.0, -0.4, 0.1), v(0.3, 0.4, -0.2)]),
+            3 => Core::Triangle([v(0.0, 0.0, 0.0), v(1.0, 0.2, 0.0), v(0.1, 0.9, 0.3)]),
+            4 => Core::Polyhedron(
+                vec![
+                    v(1.0, 0.0, 0.0),
+                    v(-0.5, 0.8, 0.1),
+                    v(-0.4, -0.7, 0.2),
+                    v(0.0, 0.1, 0.9),
+                ]
+                .into(),
+            ),
+            5 => Core::Cylinder {
+                half_height: 0.4,
+                radius: 0.3,
+            },
+            _ => Core::Cone {
+                half_height: 0.4,
+                radius: 0.3,
+            },
+        }
+    }
+
     proptest! {
         /// A hull's or triangle's reach along a direction that moves over
         /// the node (`d = c + s·e ± r` per component, `e ∈ [−1, 1]`) holds
@@ -545,19 +575,7 @@ mod tests {
             d in prop::array::uniform3(prop_oneof![Just(0.0f64), -2.0f64..2.0]),
             others in prop::collection::vec(prop::array::uniform3(-1.0f64..1.0), 8),
         ) {
-            let v = |x: f64, y: f64, z: f64| Vector3::new(x, y, z);
-            let core = match kind {
-                0 => Core::Point,
-                1 => Core::Cuboid(v(0.5, 0.2, 1.0)),
-                2 => Core::Segment([v(0.0, -0.4, 0.1), v(0.3, 0.4, -0.2)]),
-                3 => Core::Triangle([v(0.0, 0.0, 0.0), v(1.0, 0.2, 0.0), v(0.1, 0.9, 0.3)]),
-                4 => Core::Polyhedron(
-                    vec![v(1.0, 0.0, 0.0), v(-0.5, 0.8, 0.1), v(-0.4, -0.7, 0.2), v(0.0, 0.1, 0.9)]
-                        .into(),
-                ),
-                5 => Core::Cylinder { half_height: 0.4, radius: 0.3 },
-                _ => Core::Cone { half_height: 0.4, radius: 0.3 },
-            };
+            let core = sample_core(kind);
             let shape = Convex { core, border };
             let d = Vector3::from(d);
             let p = shape.support_point(&d);
@@ -581,21 +599,19 @@ mod tests {
         /// with no test take in nothing.
         #[test]
         fn the_point_test_takes_in_the_shape_and_nothing_else(
-            kind in 0usize..6,
+            kind in 0usize..7,
             border in prop_oneof![Just(0.0f64), 0.0f64..0.3],
             p in prop::array::uniform3(-1.2f64..1.2),
             directions in prop::collection::vec(prop::array::uniform3(-1.0f64..1.0), 1..6),
             weights in prop::collection::vec(0.0f64..1.0, 6),
             others in prop::collection::vec(prop::array::uniform3(-1.0f64..1.0), 32),
         ) {
-            let v = |x: f64, y: f64, z: f64| Vector3::new(x, y, z);
-            let (core, centre) = match kind {
-                0 => (Core::Point, v(0.0, 0.0, 0.0)),
-                1 => (Core::Cuboid(v(0.5, 0.2, 1.0)), v(0.0, 0.0, 0.0)),
-                2 => (Core::Segment([v(0.0, -0.4, 0.1), v(0.3, 0.4, -0.2)]), v(0.15, 0.0, -0.05)),
-                3 => (Core::Cylinder { half_height: 0.4, radius: 0.3 }, v(0.0, 0.0, 0.0)),
-                4 => (Core::Cone { half_height: 0.4, radius: 0.3 }, v(0.0, 0.0, 0.0)),
-                _ => (Core::Triangle([v(0.0, 0.0, 0.0), v(1.0, 0.2, 0.0), v(0.1, 0.9, 0.3)]), v(0.0, 0.0, 0.0)),
+            let core = sample_core(kind);
+            // A point inside the core (on it, for a point or a segment).
+            let centre = match &core {
+                Core::Segment([a, b]) => (a + b) / 2.0,
+                Core::Triangle(vs) => (vs[0] + vs[1] + vs[2]) / 3.0,
+                _ => Vector3::zeros(),
             };
             let shape = Convex { core, border };
             let p = Vector3::from(p);
@@ -607,7 +623,8 @@ mod tests {
                 }
             }
             // A point and a segment need a border to have an inside.
-            let solid = shape.tests_points() && (kind >= 1 && kind != 2 || border > 0.0);
+            let thin = matches!(shape.core, Core::Point | Core::Segment(_));
+            let solid = shape.tests_points() && (!thin || border > 0.0);
             if solid {
                 let mut sum = 0.0;
                 let mut hull = Vector3::zeros();
@@ -636,18 +653,7 @@ mod tests {
         ) {
             let v = |x: f64, y: f64, z: f64| Vector3::new(x, y, z);
             let (h, r) = (0.4, 0.3);
-            let core = match kind {
-                0 => Core::Point,
-                1 => Core::Cuboid(v(0.5, 0.2, 1.0)),
-                2 => Core::Segment([v(0.0, -0.4, 0.1), v(0.3, 0.4, -0.2)]),
-                3 => Core::Triangle([v(0.0, 0.0, 0.0), v(1.0, 0.2, 0.0), v(0.1, 0.9, 0.3)]),
-                4 => Core::Polyhedron(
-                    vec![v(1.0, 0.0, 0.0), v(-0.5, 0.8, 0.1), v(-0.4, -0.7, 0.2), v(0.0, 0.1, 0.9)]
-                        .into(),
-                ),
-                5 => Core::Cylinder { half_height: h, radius: r },
-                _ => Core::Cone { half_height: h, radius: r },
-            };
+            let core = sample_core(kind);
             let shape = Convex { core: core.clone(), border };
             let d = Vector3::from(d) * 10f64.powi(scale);
             let reach = shape.support_f64(&d);
