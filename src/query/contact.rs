@@ -713,6 +713,12 @@ mod tests {
         TriMesh::new(vertices, indices).expect("a valid mesh")
     }
 
+    /// A rotation by up to 6 rad about an axis, from `next`'s numbers.
+    fn turn(next: &mut dyn FnMut() -> f32) -> Rotation {
+        let axis = Vector::new(next() - 0.5, next() - 0.5, next() - 0.5).normalize_or(Vector::Y);
+        Rotation::from_axis_angle(axis, 6.0 * next())
+    }
+
     /// Boxes and balls dropped onto both floors at random: the contact
     /// asked through [`AxesFirst`] is parry's own (its composite contacts
     /// run EPA per triangle) on nearly every pose, both argument orders.
@@ -730,11 +736,6 @@ mod tests {
         for case in 0..2000 {
             let capsule = Capsule::new_y(0.05 + 0.5 * next(), 0.02 + 0.3 * next());
             let cuboid = Cuboid::new(Vector::new(0.05 + next(), 0.05 + next(), 0.05 + next()));
-            let turn = |next: &mut dyn FnMut() -> f32| {
-                let axis =
-                    Vector::new(next() - 0.5, next() - 0.5, next() - 0.5).normalize_or(Vector::Y);
-                Rotation::from_axis_angle(axis, 6.0 * next())
-            };
             let at = Vector::new(3.0 * next() - 1.5, 3.0 * next() - 1.5, 3.0 * next() - 1.5);
             let capsule_pose = Pose::from_parts(at, turn(&mut next));
             let box_pose = Pose::from_parts(Vector::ZERO, turn(&mut next));
@@ -812,13 +813,7 @@ mod tests {
     fn cylinder_box_contacts_beside_the_axis_are_exact() {
         use parry3d_f64::shape::{Cuboid as Cuboid64, Cylinder as Cylinder64};
         use rapier3d::parry::shape::Cylinder;
-        let mut seed = 11u64;
-        let mut next = move || {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (seed >> 40) as f32 / (1u64 << 24) as f32
-        };
+        let mut next = uniform(11u64);
         let (mut apart, mut answered) = (0, 0);
         for case in 0..3000 {
             let cylinder = Cylinder::new(0.05 + 0.5 * next(), 0.02 + 0.3 * next());
@@ -831,11 +826,6 @@ mod tests {
                 wide(h.y),
                 wide(h.z),
             ));
-            let turn = |next: &mut dyn FnMut() -> f32| {
-                let axis =
-                    Vector::new(next() - 0.5, next() - 0.5, next() - 0.5).normalize_or(Vector::Y);
-                Rotation::from_axis_angle(axis, 6.0 * next())
-            };
             let at = Vector::new(3.0 * next() - 1.5, 3.0 * next() - 1.5, 3.0 * next() - 1.5);
             let cylinder_pose = Pose::from_parts(at, turn(&mut next));
             let box_pose = Pose::from_parts(Vector::ZERO, turn(&mut next));
@@ -924,13 +914,7 @@ mod tests {
         use parry3d_f64::query::PointQuery;
         use parry3d_f64::shape::{Cuboid as Cuboid64, Triangle as Triangle64};
         use rapier3d::parry::shape::Triangle;
-        let mut seed = 5u64;
-        let mut next = move || {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (seed >> 40) as f32 / (1u64 << 24) as f32
-        };
+        let mut next = uniform(5u64);
         let wide = |v: Vector| parry3d_f64::math::Vector::new(v.x.into(), v.y.into(), v.z.into());
         let (mut apart, mut answered) = (0, 0);
         let mut worst = [0.0f64; 2];
@@ -953,11 +937,6 @@ mod tests {
                 (Box::new(Cuboid::new(h)), Box::new(Cuboid64::new(wide(h))))
             };
             let cuboid64 = Cuboid64::new(wide(half));
-            let turn = |next: &mut dyn FnMut() -> f32| {
-                let axis =
-                    Vector::new(next() - 0.5, next() - 0.5, next() - 0.5).normalize_or(Vector::Y);
-                Rotation::from_axis_angle(axis, 6.0 * next())
-            };
             let at = Vector::new(4.0 * next() - 2.0, 4.0 * next() - 2.0, 4.0 * next() - 2.0);
             let (iso1, iso2) = (
                 iso_from_pose(&Pose::from_parts(Vector::ZERO, turn(&mut next))),
