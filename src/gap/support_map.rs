@@ -482,9 +482,9 @@ impl SupportMap {
         // enclosed poses) is the slow part and GJK in `f64` is not: a
         // cylinder or a cone against a shape with corners (cylinder
         // queries: 3-4 % fewer instructions than their closed form and
-        // enclosed path). A rounded border makes the shapes' difference smooth
-        // near the closest points, where `f64` GJK creeps (a capsule
-        // against a triangle: 23 k instructions a call, measured);
+        // enclosed path). A rounded border makes the shapes' difference
+        // smooth near the closest points, where `f64` GJK creeps (a
+        // capsule against a triangle: 23 k instructions a call, measured);
         // polyhedra need no GJK at all when the last direction still
         // separates them. The point in both is looked for wherever a shape
         // has a point test (cylinder, capsule, cone queries: 2-10 % fewer
@@ -564,7 +564,7 @@ impl SupportMap {
     /// along the last direction, tested against the other
     /// ([`Convex::contains`]). Where a search checks a touch the shapes
     /// mostly overlap a little, and the deepest point of one (a box's
-    /// corner, a cone's rim) lies in the other: a few dozen operations
+    /// corner, a cone's rim) lies in the other: a few hundred instructions
     /// where GJK takes thousands to close its simplex around the origin.
     fn overlap_witnessed(&self, rel: &Isometry3<f64>) -> bool {
         let Some(m) = self.last.get() else {
