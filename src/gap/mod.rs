@@ -47,7 +47,7 @@ pub(crate) use cuboid_cuboid::CuboidCuboid;
 pub(crate) use cuboid_triangle::CuboidTriangle;
 pub(crate) use halfspace::HalfSpaceConvex;
 pub(crate) use support::{Convex, Core};
-pub(crate) use support_map::{SupportMap, segment_box, segment_segment};
+pub(crate) use support_map::{SupportMap, beside_axis, segment_box, segment_segment};
 pub(crate) use triangle_triangle::TriangleTriangle;
 
 use crate::convert::vec_from_glam;

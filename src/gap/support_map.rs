@@ -882,9 +882,17 @@ fn cylinder_box(
     ]
     .map(|p| (pose * nalgebra::Point3::from(p)).coords);
     let (p, q) = segment_box(&axis, half);
+    beside_axis(&axis, &p).then_some(q - p)
+}
+
+/// Whether the point `p` of the segment `axis` lies strictly between its
+/// ends (by more than 1e-9 of its length): where a cylinder's axis point
+/// nearest a box lies so, the cylinder's closest points to it are its
+/// capsule's (see [`cylinder_box`]).
+pub(crate) fn beside_axis(axis: &[Vector3<f64>; 2], p: &Vector3<f64>) -> bool {
     let along = axis[1] - axis[0];
     let s = (p - axis[0]).dot(&along) / along.norm_squared();
-    (s > 1.0e-9 && s < 1.0 - 1.0e-9).then_some(q - p)
+    s > 1.0e-9 && s < 1.0 - 1.0e-9
 }
 
 /// Whether [`core_direction`] has a closed form for these cores (it may

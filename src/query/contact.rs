@@ -158,12 +158,8 @@ fn round_cuboid(
     // is square to the axis and leaves the cylinder through its side, so
     // shapes apart have the capsule's closest points. Elsewhere, or
     // overlapping, parry's.
-    if cylinder {
-        let along = segment[1] - segment[0];
-        let s = (on_segment - segment[0]).dot(&along) / along.norm_squared();
-        if !(s > 1.0e-9 && s < 1.0 - 1.0e-9 && dist > 0.0) {
-            return None;
-        }
+    if cylinder && !(dist > 0.0 && gap::beside_axis(&segment, &on_segment)) {
+        return None;
     }
     if dist > prediction {
         return Some(None);
