@@ -11,6 +11,7 @@ use std::collections::HashMap;
 
 /// A frame of the search: a body's motion, or a frame fixed to another at
 /// a local pose (a compound's part).
+#[derive(Debug)]
 pub(super) struct FrameDef {
     pub motion: Motion,
     /// The parent frame and this frame's rotation and origin in it.
@@ -48,6 +49,11 @@ impl<E: Enclosure> Frames<E> {
             child_frames: HashMap::new(),
             relative: Vec::new(),
         }
+    }
+
+    /// The frames' definitions, for their buffer to be used again.
+    pub fn into_defs(self) -> Vec<FrameDef> {
+        self.defs
     }
 
     pub fn motion(&self, index: u32) -> &Motion {

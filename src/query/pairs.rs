@@ -16,7 +16,9 @@ use rapier3d::parry::shape::Shape;
 /// bad parameters) is reported as its error after the search.
 pub(super) struct Search<'a, 's> {
     pub solver: &'a mut Solver,
-    pub frames: Vec<FrameDef>,
+    /// Taken for the search and given back after it (the caller keeps
+    /// the buffer).
+    pub frames: &'a mut Vec<FrameDef>,
     pub pairs: Vec<PairEntry<'s>>,
     pub skin: f64,
     pub options: &'a SolveOptions,
@@ -65,7 +67,7 @@ impl InArithmetic for Search<'_, '_> {
             .fold(0.0, f64::max);
         let mut set = PairSet::<E> {
             widest_turn,
-            frames: Frames::new(frames, rotation_read),
+            frames: Frames::new(std::mem::take(frames), rotation_read),
             initial: pairs.len(),
             pairs,
             skin,
@@ -74,7 +76,9 @@ impl InArithmetic for Search<'_, '_> {
             prepared: Vec::new(),
             error: None,
         };
-        let outcome = solver.solve(&mut set, options)?;
+        let outcome = solver.solve(&mut set, options);
+        *frames = set.frames.into_defs();
+        let outcome = outcome?;
         if let Some(error) = set.error {
             return Err(error);
         }
