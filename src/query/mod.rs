@@ -44,7 +44,7 @@ use crate::error::{CcdError, check_finite};
 use crate::gap;
 use crate::gap::composite::{self, PairSide};
 use crate::motion::Motion;
-use crate::solve::{InitialContact, RootStatus, SolveOptions, SolveStats, Solver};
+use crate::solve::{InitialContact, RootStatus, SolveOptions, SolveOutcome, SolveStats, Solver};
 use balls::Balls;
 use frames::FrameDef;
 use nalgebra::{Point3, Vector3};
@@ -245,76 +245,59 @@ impl Query {
     ) -> Result<Option<ManyToi>, CcdError> {
         self.spent = SolveStats::default();
         let solve_options = options.solve_options()?;
-        let frames = &mut self.frames;
-        frames.clear();
-        frames.extend(moving.iter().map(|m| FrameDef::root(m.motion)));
-        frames.extend(targets.iter().map(|t| FrameDef::root(t.motion)));
-        let mut pairs = Vec::with_capacity(moving.len() * targets.len());
-        for (i, m) in moving.iter().enumerate() {
-            for (j, t) in targets.iter().enumerate() {
-                let (a, b) = (i as u32, (moving.len() + j) as u32);
-                let kind = if composite::is_composite(m.shape) || composite::is_composite(t.shape) {
-                    composite::check_leaves(m.shape, t.shape, options.skin)?;
-                    let (ia, ib) = (PairSide::whole(m.shape, a), PairSide::whole(t.shape, b));
-                    PairContent::Composite(CompositePair::new(ia, ib))
-                } else {
-                    let built = gap::build(m.shape, t.shape, options.skin)?;
-                    PairContent::Leaf(built.gap, built.swapped)
-                };
-                let balls = Balls::new(
-                    &kind,
-                    (&m.motion, m.shape),
-                    (&t.motion, t.shape),
-                    options.skin,
-                );
-                pairs.push(PairEntry {
-                    kind,
-                    a,
-                    b,
-                    balls,
-                    piece: None,
-                    moving: i,
-                    target: j,
-                });
-            }
-        }
+        // Built before the advancement, so that a pair the crate cannot
+        // search is an error whatever the advancement finds.
+        let pairs = pairs_of(moving, targets, options.skin)?;
         // Pairs that turn fast are first advanced to where they may come
         // close (see `advance`): the search starts at the earliest such
-        // time, and is not needed at all if every pair stays apart.
+        // time, and is not needed at all if every pair stays apart. Where
+        // a pair's advancement also found the shapes overlapping at a
+        // later time, the first impact is no later: the search ends there.
         let span = solve_options.span;
-        let mut start = span.hi;
+        let (mut start, mut touch_by) = (span.hi, span.hi);
         let mut advances = 0;
         'pairs: for m in moving {
             for t in targets {
-                let (until, steps) = advance::apart_until(m, t, span, options.skin);
-                advances += steps;
-                start = start.min(until);
+                let advanced = advance::apart_until(m, t, span, options.skin);
+                advances += advanced.steps;
+                start = start.min(advanced.until);
+                touch_by = touch_by.min(advanced.overlap_at.unwrap_or(span.hi));
                 if start <= span.lo {
                     break 'pairs;
                 }
             }
         }
+        self.spent.advances = advances;
         if start >= span.hi {
-            self.spent.advances = advances;
             return Ok(None);
         }
         // Advanced past the span's start, every pair is proved apart at
         // the new start (each stops short of where its proof ends): the
         // search need not check for pairs touching there.
-        let solve_options = SolveOptions {
-            span: TimeSpan::new(start, span.hi),
+        let first = SolveOptions {
+            span: TimeSpan::new(start, touch_by.max(start)),
             start_apart: start > span.lo,
             ..solve_options
         };
-        let (outcome, hit) = options.arithmetic.dispatch(Search {
-            solver: &mut self.solver,
-            frames,
-            pairs,
-            skin: options.skin,
-            options: &solve_options,
-        })?;
-        self.spent = outcome.stats;
-        self.spent.advances = advances;
+        let (mut outcome, mut hit) = self.search(moving, targets, pairs, options, &first)?;
+        if hit.is_none() && touch_by < span.hi {
+            // The overlap at `touch_by` (GJK's, in `f64`) should have left
+            // a touch in the first part; should rounding have misled it,
+            // the rest of the span is searched as well.
+            let rest = SolveOptions {
+                span: TimeSpan::new(touch_by, span.hi),
+                start_apart: false,
+                ..solve_options
+            };
+            let pairs = pairs_of(moving, targets, options.skin)?;
+            let stats = outcome.stats;
+            (outcome, hit) = self.search(moving, targets, pairs, options, &rest)?;
+            outcome.stats += stats;
+        }
+        self.spent = SolveStats {
+            advances,
+            ..outcome.stats
+        };
         let Some((i, j)) = hit else {
             return Ok(None);
         };
@@ -332,4 +315,61 @@ impl Query {
             target: j,
         }))
     }
+
+    /// One search of `pairs` over `solve_options.span`: its outcome and
+    /// the (moving, target) indices of the pair that may touch.
+    fn search<'s>(
+        &mut self,
+        moving: &[ShapeMotion],
+        targets: &[ShapeMotion],
+        pairs: Vec<PairEntry<'s>>,
+        options: &QueryOptions,
+        solve_options: &SolveOptions,
+    ) -> Result<(SolveOutcome, Option<(usize, usize)>), CcdError> {
+        let frames = &mut self.frames;
+        frames.clear();
+        frames.extend(moving.iter().map(|m| FrameDef::root(m.motion)));
+        frames.extend(targets.iter().map(|t| FrameDef::root(t.motion)));
+        options.arithmetic.dispatch(Search {
+            solver: &mut self.solver,
+            frames,
+            pairs,
+            skin: options.skin,
+            options: solve_options,
+        })
+    }
+}
+
+/// Every moving shape against every target, as the search's pairs (the
+/// moving shapes' frames first, then the targets').
+fn pairs_of<'s>(
+    moving: &[ShapeMotion<'s>],
+    targets: &[ShapeMotion<'s>],
+    skin: f64,
+) -> Result<Vec<PairEntry<'s>>, CcdError> {
+    let mut pairs = Vec::with_capacity(moving.len() * targets.len());
+    for (i, m) in moving.iter().enumerate() {
+        for (j, t) in targets.iter().enumerate() {
+            let (a, b) = (i as u32, (moving.len() + j) as u32);
+            let kind = if composite::is_composite(m.shape) || composite::is_composite(t.shape) {
+                composite::check_leaves(m.shape, t.shape, skin)?;
+                let (ia, ib) = (PairSide::whole(m.shape, a), PairSide::whole(t.shape, b));
+                PairContent::Composite(CompositePair::new(ia, ib))
+            } else {
+                let built = gap::build(m.shape, t.shape, skin)?;
+                PairContent::Leaf(built.gap, built.swapped)
+            };
+            let balls = Balls::new(&kind, (&m.motion, m.shape), (&t.motion, t.shape), skin);
+            pairs.push(PairEntry {
+                kind,
+                a,
+                b,
+                balls,
+                piece: None,
+                moving: i,
+                target: j,
+            });
+        }
+    }
+    Ok(pairs)
 }
