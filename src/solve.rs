@@ -226,6 +226,17 @@ const FLOOR_SHARE: f64 = 1.0 / 64.0;
 /// too.
 const PROBE_SHARE: f64 = 0.999;
 
+/// A likely touch more than `ε` after the node's start is first checked
+/// this share of the way there: the root mostly lies much nearer the
+/// start (a tenth to a fifth of the way on the cone queries traced), so
+/// the check mostly confirms a bracket half as wide, and a failed one
+/// costs one single-time evaluation before the check at the likely time
+/// itself. Queries bench instructions against checking the likely time
+/// only (ordinary spins / 200–1000 rad/s): cone −5 % / 0 %, capsule
+/// −10 % / −2 %, cylinder +1 % / −2 %, hull–mesh −1 % / +0.5 %; a quarter
+/// of the way did worse, 0.7 of the way about as well.
+const EARLY: f64 = 0.5;
+
 /// The most pieces one node is cut into at once.
 const MAX_PIECES: usize = 32;
 
@@ -412,8 +423,20 @@ impl Solver {
                 }
             });
             let confirmed = match (node.certain, likely) {
-                (None, Some(t)) if self.touching_at(gaps, t, &node, &mut out, &mut stats) => {
-                    Some(t)
+                (None, Some(t)) => {
+                    // First `EARLY` of the way to it, where the root
+                    // mostly lies already.
+                    let early = clipped.lo + EARLY * (t - clipped.lo);
+                    if t - clipped.lo > options.epsilon
+                        && early > clipped.lo
+                        && self.touching_at(gaps, early, &node, &mut out, &mut stats)
+                    {
+                        Some(early)
+                    } else if self.touching_at(gaps, t, &node, &mut out, &mut stats) {
+                        Some(t)
+                    } else {
+                        None
+                    }
                 }
                 (certain, _) => certain,
             };
