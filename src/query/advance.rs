@@ -196,11 +196,12 @@ fn overlap_after(
     let at = At::new(&pa, &pb, 0.0);
     let n = pa.rotation.inverse() * stalled.direction;
     let closing = (stalled.gap - at.gap_along(&n, ca, cb)) / (later - stalled.tau);
-    if !(closing > 0.0) {
+    // Not closing (or NaN from a degenerate motion): no guess.
+    if closing.is_nan() || closing <= 0.0 {
         return None;
     }
     let guess = stalled.tau + OVERSHOOT * stalled.gap.max(0.0) / closing;
-    if !(guess < hi) {
+    if guess.is_nan() || guess >= hi {
         return None;
     }
     let (pa, pb) = (a.motion.pose_at(guess), b.motion.pose_at(guess));
