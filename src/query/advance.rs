@@ -193,6 +193,8 @@ fn overlap_after(
         return None;
     }
     let (pa, pb) = (a.motion.pose_at(later), b.motion.pose_at(later));
+    // No rounding slack: the guess needs none, and the overlap it leads
+    // to is checked.
     let at = At::new(&pa, &pb, 0.0);
     let n = pa.rotation.inverse() * stalled.direction;
     let closing = (stalled.gap - at.gap_along(&n, ca, cb)) / (later - stalled.tau);

@@ -174,8 +174,9 @@ thread_local! {
 }
 
 /// Runs `f` on this thread's query context, or on a fresh one when that
-/// context is in use (a query asked from inside another, e.g. by a
-/// dispatcher the search calls back into).
+/// context is in use (a query asked while another runs on this thread,
+/// which the crate itself never does; the dispatcher's casts, on rapier's
+/// worker threads with its `parallel` feature, each get their thread's).
 fn with_query<T>(f: impl FnOnce(&mut Query) -> T) -> T {
     QUERY.with(|cell| match cell.try_borrow_mut() {
         Ok(mut query) => f(&mut query),
