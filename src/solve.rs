@@ -308,48 +308,17 @@ impl Solver {
                 stats,
             });
         };
-        // Pairs touching at the very start: the answer, or left out. A root
-        // whose clip excludes the start needs no check. A root that sees no
-        // touch (none from its start on, none inside it) is cut up with no
-        // more work, and the check waits for the first node to reach the
-        // start (depth-first, the next one): most often that node is proved
-        // apart or clipped past the start, and the check is never made.
-        // Otherwise (a touch seen, whose confirmation may bracket the root;
-        // a span no wider than `ε`) the check is made at once.
+        // Pairs touching at the very start: the answer, or left out. The
+        // check is made lazily, on the node that reaches the start (depth-
+        // first, earlier first: while the start is open, every node does)
+        // when its bounds see some pair touching from its start on, or
+        // before a report at the start. Most searches never make it: some
+        // node's clip leaves the start, or proves every pair apart there,
+        // first. (Made as soon as a root saw a touch anywhere, it was a sixth
+        // of the slowest hull–mesh query, for a start the next clip left.)
         let ignore = options.initial_contact == InitialContact::Ignore;
-        let mut start_open = !options.start_apart && root_node.span.lo <= span.lo;
-        let mut first = None;
-        if !start_open {
-            first = Some((root, root_node));
-        } else if span.width() > options.epsilon
-            && !root_node.touches_at_start
-            && root_node.certain.is_none()
-            && root_node.likely.is_none()
-        {
-            if !self.requeue(span.width(), &root_node, gaps.useful_width()) {
-                // Not reached (a root wider than `ε` splits); kept whole,
-                // it is reported at the floor.
-                self.stack.push(Frame {
-                    span: root_node.span,
-                    start: root_node.start,
-                    end: root_node.end,
-                });
-            }
-        } else {
-            start_open = false;
-            let pairs = (root_node.start, root_node.end);
-            if let Some(touching) =
-                self.check_start(gaps, span, pairs, ignore, &mut out, &mut stats)
-            {
-                return Ok(touching);
-            }
-            // The root's visit holds unless it saw pairs now left out.
-            if self.ignored.is_empty() {
-                first = Some((root, root_node));
-            } else {
-                self.stack.push(root);
-            }
-        }
+        let mut start_open = !options.start_apart;
+        let mut first = Some((root, root_node));
         loop {
             let (frame, node) = match first.take() {
                 Some(reused) => reused,
@@ -374,121 +343,35 @@ impl Solver {
                     (frame, node)
                 }
             };
-            if start_open {
-                // The first node to reach the start, which its clip did
-                // not exclude: the deferred check.
-                debug_assert!(frame.span.lo <= span.lo);
+            if start_open && node.span.lo > span.lo {
                 start_open = false;
-                if node.span.lo <= span.lo {
-                    let pairs = (frame.start, frame.end);
-                    let found = self.check_start(gaps, span, pairs, ignore, &mut out, &mut stats);
-                    if let Some(touching) = found {
-                        return Ok(touching);
-                    }
-                    if !self.ignored.is_empty() {
-                        // This visit saw pairs now left out: again.
-                        self.stack.push(frame);
-                        continue;
-                    }
-                }
             }
-            let clipped = node.span;
-            // Report only a node that was itself evaluated at width ≤ ε, and
-            // only once some pair is seen touching by its end (so the true
-            // time is within ε after the report) or the node reached the
-            // floor width (a near-touch that never quite closes).
-            if frame.span.width() <= options.epsilon {
-                let floor = frame.span.width() <= options.epsilon * FLOOR_SHARE;
-                if floor || self.touching_at(gaps, clipped.hi, &node, &mut out, &mut stats) {
-                    return Ok(hit(clipped.lo, node.earliest_pair, stats));
-                }
-            }
-            let (start, end) = (node.start, node.end);
-            // A likely touch confirmed at its single time (where adaptive
-            // axes are chosen for that very time) is as good as certain.
-            // A likely time within `ε` of the node's start is checked
-            // `ε` after the start instead: such a time is mostly an
-            // adaptive axis taken at the node's middle that reads low at
-            // the start (the shapes are apart there, but less so along that
-            // direction), and the check at it failed; one `ε` on confirms
-            // a root that close, and the bracket is then settled. (Cone
-            // queries 3–5 % fewer instructions, cylinder 2–4 %; skipping
-            // such checks instead cost 3–19 % more.)
-            let likely = node.likely.map(|t| {
-                let near = clipped.lo + PROBE_SHARE * options.epsilon;
-                if t < near && near < clipped.hi {
-                    near
-                } else {
-                    t
-                }
-            });
-            let confirmed = match (node.certain, likely) {
-                (None, Some(t)) => {
-                    // First `EARLY` of the way to it, where the root
-                    // mostly lies already.
-                    let early = clipped.lo + EARLY * (t - clipped.lo);
-                    if t - clipped.lo > options.epsilon
-                        && early > clipped.lo
-                        && self.touching_at(gaps, early, &node, &mut out, &mut stats)
-                    {
-                        Some(early)
-                    } else if self.touching_at(gaps, t, &node, &mut out, &mut stats) {
-                        Some(t)
-                    } else {
-                        None
-                    }
-                }
-                (certain, _) => certain,
-            };
-            if let Some(sure) = confirmed {
-                // A root lies in [clipped.lo, sure]: report when that is
-                // narrow enough, else look there first (the bracket shrinks
-                // quadratically near a simple root; the calibration's "split next
-                // to the left end", guarded by certainty).
-                let bracket = sure - clipped.lo;
-                if bracket <= options.epsilon {
-                    return Ok(hit(clipped.lo, node.earliest_pair, stats));
-                }
-                // The start has converged (this node's clip moved it, but
-                // by less than `ε`) while the confirmed time creeps towards
-                // it from above, a few times closer per node (a pair whose
-                // enclosure is wide, spinning or turning into contact): one
-                // touch check just inside `ε` after the start settles the
-                // bracket at once when the start is the root already. (A
-                // start the clip did not move at all has not converged,
-                // its bound is merely loose there: the check would fail.)
-                let moved = clipped.lo - frame.span.lo;
-                let probe = clipped.lo + PROBE_SHARE * options.epsilon;
-                if moved > 0.0
-                    && moved < options.epsilon
-                    && probe < sure
-                    && self.touching_at(gaps, probe, &node, &mut out, &mut stats)
+            if start_open && node.sure_at_start {
+                // A sure touch at the start: the check before following it.
+                start_open = false;
+                match self
+                    .deferred_start_check(gaps, span, frame, &node, ignore, &mut out, &mut stats)
                 {
-                    return Ok(hit(clipped.lo, node.earliest_pair, stats));
+                    StartCheck::Touching(touching) => return Ok(touching),
+                    StartCheck::Again => continue,
+                    StartCheck::Clear => {}
                 }
-                // A bracket that kept most of the node is halved as well:
-                // where the gap closes slowly (a grazing or sliding pair)
-                // the confirmed time creeps towards the root by a few
-                // percent per node while the start never moves (false
-                // position's one-sided convergence), up to 150 nodes where
-                // halving needs 20.
-                let mid = clipped.lo + 0.5 * bracket;
-                let halve = bracket >= RECLIP_SHARE * frame.span.width();
-                if halve && clipped.lo < mid && mid < sure {
-                    self.stack.push(Frame {
-                        span: TimeSpan::new(sure, clipped.hi),
-                        start,
-                        end,
-                    });
-                    self.push_halves(TimeSpan::new(clipped.lo, sure), mid, start, end);
-                } else {
-                    self.push_halves(clipped, sure, start, end);
-                }
+            }
+            let Some(time) = self.decide(gaps, options, frame, &node, &mut out, &mut stats) else {
                 continue;
+            };
+            if start_open {
+                // About to report the start itself.
+                start_open = false;
+                match self
+                    .deferred_start_check(gaps, span, frame, &node, ignore, &mut out, &mut stats)
+                {
+                    StartCheck::Touching(touching) => return Ok(touching),
+                    StartCheck::Again => continue,
+                    StartCheck::Clear => {}
+                }
             }
-            if !self.requeue(frame.span.width(), &node, gaps.useful_width()) {
-                return Ok(hit(clipped.lo, node.earliest_pair, stats));
-            }
+            return Ok(hit(time, node.earliest_pair, stats));
         }
         Ok(SolveOutcome {
             status: RootStatus::Separated,
@@ -496,6 +379,146 @@ impl Solver {
             pair: None,
             stats,
         })
+    }
+
+    /// The start check on `frame`, a node that reaches the start of `span`,
+    /// visited as `node`: the answer when a pair touches there and touches
+    /// are reported; `Again` when pairs are now left out (the node is
+    /// queued to be visited without them: its visit and whatever it queued
+    /// counted them). Only the node's surviving pairs are checked: it
+    /// proved the others apart over its span, its start among it.
+    #[allow(clippy::too_many_arguments)]
+    fn deferred_start_check<E: Enclosure, G: GapSet<E>>(
+        &mut self,
+        gaps: &mut G,
+        span: TimeSpan,
+        frame: Frame,
+        node: &Visited,
+        ignore: bool,
+        out: &mut [E; MAX_AXES],
+        stats: &mut SolveStats,
+    ) -> StartCheck {
+        debug_assert!(frame.span.lo <= span.lo);
+        let pairs = (node.start, node.end);
+        if let Some(touching) = self.check_start(gaps, span, pairs, ignore, out, stats) {
+            return StartCheck::Touching(touching);
+        }
+        if self.ignored.is_empty() {
+            return StartCheck::Clear;
+        }
+        self.stack.push(frame);
+        StartCheck::Again
+    }
+
+    /// What a visited node leads to: `Some(time)`, a hit to report at
+    /// `time` (its clipped start), or `None` with its sub-nodes queued.
+    fn decide<E: Enclosure, G: GapSet<E>>(
+        &mut self,
+        gaps: &mut G,
+        options: &SolveOptions,
+        frame: Frame,
+        node: &Visited,
+        out: &mut [E; MAX_AXES],
+        stats: &mut SolveStats,
+    ) -> Option<f64> {
+        let clipped = node.span;
+        // Report only a node that was itself evaluated at width ≤ ε, and
+        // only once some pair is seen touching by its end (so the true
+        // time is within ε after the report) or the node reached the
+        // floor width (a near-touch that never quite closes).
+        if frame.span.width() <= options.epsilon {
+            let floor = frame.span.width() <= options.epsilon * FLOOR_SHARE;
+            if floor || self.touching_at(gaps, clipped.hi, node, out, stats) {
+                return Some(clipped.lo);
+            }
+        }
+        let (start, end) = (node.start, node.end);
+        // A likely touch confirmed at its single time (where adaptive
+        // axes are chosen for that very time) is as good as certain.
+        // A likely time within `ε` of the node's start is checked
+        // `ε` after the start instead: such a time is mostly an
+        // adaptive axis taken at the node's middle that reads low at
+        // the start (the shapes are apart there, but less so along that
+        // direction), and the check at it failed; one `ε` on confirms
+        // a root that close, and the bracket is then settled. (Cone
+        // queries 3–5 % fewer instructions, cylinder 2–4 %; skipping
+        // such checks instead cost 3–19 % more.)
+        let likely = node.likely.map(|t| {
+            let near = clipped.lo + PROBE_SHARE * options.epsilon;
+            if t < near && near < clipped.hi {
+                near
+            } else {
+                t
+            }
+        });
+        let confirmed = match (node.certain, likely) {
+            (None, Some(t)) => {
+                // First `EARLY` of the way to it, where the root
+                // mostly lies already.
+                let early = clipped.lo + EARLY * (t - clipped.lo);
+                if t - clipped.lo > options.epsilon
+                    && early > clipped.lo
+                    && self.touching_at(gaps, early, node, out, stats)
+                {
+                    Some(early)
+                } else if self.touching_at(gaps, t, node, out, stats) {
+                    Some(t)
+                } else {
+                    None
+                }
+            }
+            (certain, _) => certain,
+        };
+        if let Some(sure) = confirmed {
+            // A root lies in [clipped.lo, sure]: report when that is
+            // narrow enough, else look there first (the bracket shrinks
+            // quadratically near a simple root; the calibration's "split next
+            // to the left end", guarded by certainty).
+            let bracket = sure - clipped.lo;
+            if bracket <= options.epsilon {
+                return Some(clipped.lo);
+            }
+            // The start has converged (this node's clip moved it, but
+            // by less than `ε`) while the confirmed time creeps towards
+            // it from above, a few times closer per node (a pair whose
+            // enclosure is wide, spinning or turning into contact): one
+            // touch check just inside `ε` after the start settles the
+            // bracket at once when the start is the root already. (A
+            // start the clip did not move at all has not converged,
+            // its bound is merely loose there: the check would fail.)
+            let moved = clipped.lo - frame.span.lo;
+            let probe = clipped.lo + PROBE_SHARE * options.epsilon;
+            if moved > 0.0
+                && moved < options.epsilon
+                && probe < sure
+                && self.touching_at(gaps, probe, node, out, stats)
+            {
+                return Some(clipped.lo);
+            }
+            // A bracket that kept most of the node is halved as well:
+            // where the gap closes slowly (a grazing or sliding pair)
+            // the confirmed time creeps towards the root by a few
+            // percent per node while the start never moves (false
+            // position's one-sided convergence), up to 150 nodes where
+            // halving needs 20.
+            let mid = clipped.lo + 0.5 * bracket;
+            let halve = bracket >= RECLIP_SHARE * frame.span.width();
+            if halve && clipped.lo < mid && mid < sure {
+                self.stack.push(Frame {
+                    span: TimeSpan::new(sure, clipped.hi),
+                    start,
+                    end,
+                });
+                self.push_halves(TimeSpan::new(clipped.lo, sure), mid, start, end);
+            } else {
+                self.push_halves(clipped, sure, start, end);
+            }
+            return None;
+        }
+        if !self.requeue(frame.span.width(), node, gaps.useful_width()) {
+            return Some(clipped.lo);
+        }
+        None
     }
 
     /// If `pair` is composite, queue its sub-pairs that may touch on
@@ -768,7 +791,7 @@ impl Solver {
             span: clipped,
             certain,
             likely,
-            touches_at_start: e_certain.min(e_likely) <= -1.0,
+            sure_at_start: e_certain <= -1.0,
             start: frame.end,
             end: self.arena.len(),
             earliest_pair,
@@ -786,6 +809,17 @@ fn hit(time: f64, pair: usize, stats: SolveStats) -> SolveOutcome {
     }
 }
 
+/// What the deferred start check found.
+enum StartCheck {
+    /// A pair touches at the start, and such touches are reported.
+    Touching(SolveOutcome),
+    /// Pairs touching at the start are now left out; the node is queued
+    /// again.
+    Again,
+    /// No pair touches at the start.
+    Clear,
+}
+
 /// A visited node that may hold a root.
 struct Visited {
     span: TimeSpan,
@@ -794,8 +828,8 @@ struct Visited {
     /// A time within `span` by which a pair with adaptive axes likely
     /// touches (not yet confirmed).
     likely: Option<f64>,
-    /// Some pair surely or likely touches from the node's start on.
-    touches_at_start: bool,
+    /// Some pair surely touches from the node's start on.
+    sure_at_start: bool,
     start: usize,
     end: usize,
     earliest_pair: usize,

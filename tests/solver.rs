@@ -267,6 +267,10 @@ struct PolySet {
     pairs: Vec<Vec<[f64; 4]>>,
     /// What the set answers for `GapSet::useful_width`.
     useful: f64,
+    /// What the set answers for `GapSet::is_exact`: `false` makes the
+    /// solver treat its touches as likely only, confirmed at single times
+    /// (the adaptive-axis families' path).
+    exact: bool,
 }
 
 impl PolySet {
@@ -318,7 +322,7 @@ impl<E: Enclosure> GapSet<E> for PolySet {
         self.pairs[pair].len()
     }
     fn is_exact(&self, _pair: usize) -> bool {
-        true // the axes are the functions themselves
+        self.exact // true to life: the axes are the functions themselves
     }
     fn useful_width(&self) -> f64 {
         self.useful
@@ -362,7 +366,13 @@ fn and_or_sets_match_brute_force() {
         } else {
             rng.range(0.003, 0.4)
         };
-        let mut set = PolySet { pairs, useful };
+        // Every other pair of cases claims its axes are not exact.
+        let exact = case % 4 < 2;
+        let mut set = PolySet {
+            pairs,
+            useful,
+            exact,
+        };
         let truth = set.brute_force(samples);
         for kind in Arithmetic::ALL {
             let options = SolveOptions {
@@ -426,6 +436,7 @@ fn and_or_sets_match_brute_force() {
 fn budget_exhaustion_is_conservative() {
     let mut set = PolySet {
         useful: f64::INFINITY,
+        exact: true,
         // Touches zero only at τ = 0.7 (a double root): hard to exclude.
         pairs: vec![vec![[0.49, -1.4, 1.0, 0.0]]],
     };
@@ -448,6 +459,7 @@ fn budget_exhaustion_is_conservative() {
 fn bad_parameters_are_typed_errors() {
     let mut set = PolySet {
         useful: f64::INFINITY,
+        exact: true,
         pairs: vec![vec![[1.0, 0.0, 0.0, 0.0]]],
     };
     for eps in [0.0, -1.0, f64::NAN, 2.0] {
@@ -470,11 +482,16 @@ fn initial_contacts_are_reported_or_left_out() {
     use affine_ccd::InitialContact;
     // Touching from the start to the end (−0.1 + 0.05τ stays ≤ 0), or only
     // for the first 1 % of the step (−0.01 + τ): the check at the start
-    // finds both, whether the search halves nodes or cuts them into pieces.
-    for touching in [[-0.1, 0.05, 0.0, 0.0], [-0.01, 1.0, 0.0, 0.0]] {
+    // finds both, whether the search halves nodes or cuts them into pieces,
+    // and whether it sees the touch as sure (exact axes: the check is made
+    // on the node that sees it) or only likely (made before the start
+    // would be reported).
+    let touchings = [[-0.1, 0.05, 0.0, 0.0], [-0.01, 1.0, 0.0, 0.0]];
+    for (touching, exact) in touchings.into_iter().flat_map(|c| [(c, true), (c, false)]) {
         for useful in [f64::INFINITY, 0.1] {
             let mut set = PolySet {
                 useful,
+                exact,
                 pairs: vec![
                     vec![touching],
                     // Reaches zero at τ = 0.5.
@@ -515,9 +532,10 @@ fn initial_contacts_are_reported_or_left_out() {
 fn a_pair_reaching_zero_just_after_the_start_is_a_hit_not_a_contact() {
     // Apart at the start by 1e-3 and touching from τ = 1e-3 on: the start
     // check must not call it initially touching, and the hit is on time.
-    for useful in [f64::INFINITY, 0.1] {
+    for (useful, exact) in [(f64::INFINITY, true), (0.1, true), (f64::INFINITY, false)] {
         let mut set = PolySet {
             useful,
+            exact,
             pairs: vec![vec![[1.0e-3, -1.0, 0.0, 0.0]]],
         };
         let options = SolveOptions::default();
