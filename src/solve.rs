@@ -12,7 +12,9 @@
 //! 1. evaluates the alive axes of the alive pairs;
 //! 2. drops pairs that an axis proves apart (lower bound > 0), and inside a
 //!    surviving pair drops axes that can never separate on this node's
-//!    sub-nodes (upper bound below another axis's lower bound);
+//!    sub-nodes (upper bound below another axis's lower bound); a surviving
+//!    pair keeps the window where it may touch, and sub-nodes outside it
+//!    pass it over;
 //! 3. clips the node with each axis's linear lower bound (docs/design.md §6): only
 //!    where every axis of some pair may be `≤ 0` can a root lie;
 //! 4. stops when the clipped node is at most `ε` wide, reporting its start:
@@ -201,11 +203,35 @@ struct Frame {
     end: usize,
 }
 
-/// An alive pair on a node: its number and its alive axes.
+/// An alive pair on a node: its number, its alive axes, and its window:
+/// the times where the node that kept it found it may touch (outside it
+/// some axis's linear lower bound is positive, so the pair is apart there).
+/// Sub-nodes and single-time checks pass over a pair whose window misses
+/// them without evaluating it: on a shape against a mesh each triangle's
+/// window is much narrower than the node.
 #[derive(Clone, Copy, Debug)]
 struct Alive {
     pair: u32,
     axes: u64,
+    window: TimeSpan,
+}
+
+impl Alive {
+    /// A pair with every one of its `axes` alive, not yet judged on
+    /// `span`.
+    fn fresh(pair: u32, axes: usize, span: TimeSpan) -> Alive {
+        Alive {
+            pair,
+            axes: full_mask(axes),
+            window: span,
+        }
+    }
+
+    /// Whether the pair may touch somewhere on `span` (or at a single
+    /// time, `span.lo == span.hi`) for all its window says.
+    fn may_touch_on(&self, span: TimeSpan) -> bool {
+        self.window.lo <= span.hi && span.lo <= self.window.hi
+    }
 }
 
 /// When clipping leaves less than this share of a node, the clipped node
@@ -290,10 +316,7 @@ impl Solver {
                     expected: "at most 64",
                 });
             }
-            self.arena.push(Alive {
-                pair: pair as u32,
-                axes: full_mask(axes),
-            });
+            self.arena.push(Alive::fresh(pair as u32, axes, span));
         }
         let (start, end) = (0, self.arena.len());
         let root = Frame { span, start, end };
@@ -535,10 +558,7 @@ impl Solver {
         }
         for &child in &self.children {
             let n = gaps.axis_count(child as usize).min(MAX_AXES);
-            self.pending.push(Alive {
-                pair: child,
-                axes: full_mask(n),
-            });
+            self.pending.push(Alive::fresh(child, n, span));
         }
         true
     }
@@ -613,6 +633,9 @@ impl Solver {
         let span = TimeSpan::new(t, t);
         gaps.begin_node(span);
         for alive in &self.arena[node.start..node.end] {
+            if !alive.may_touch_on(span) {
+                continue;
+            }
             gaps.eval(alive.pair as usize, span, alive.axes, out);
             stats.pair_evaluations += 1;
             stats.axis_evaluations += u64::from(alive.axes.count_ones());
@@ -668,6 +691,9 @@ impl Solver {
         self.pending.clear();
         self.pending.extend_from_slice(&self.arena[start..end]);
         while let Some(item) = self.pending.pop() {
+            if !item.may_touch_on(span) {
+                continue;
+            }
             let pair = item.pair as usize;
             gaps.eval(pair, span, item.axes, out);
             stats.pair_evaluations += 1;
@@ -707,6 +733,12 @@ impl Solver {
         // confirmed by a point evaluation before it is relied on.
         let mut e_likely = f64::INFINITY;
         let mut earliest_pair = 0usize;
+        let (m, h) = span.center_radius();
+        // τ = m + h·e takes two roundings: step out by a few ulps of the sum.
+        let to_time = |e: f64, direction: f64| {
+            let t = m + h * e;
+            t + direction * 4.0 * f64::EPSILON * (m.abs() + (h * e).abs())
+        };
         // Pairs to look at: the frame's list (left intact for its sibling
         // node), then any sub-pairs that composites expand into.
         let mut cursor = frame.start;
@@ -720,7 +752,7 @@ impl Solver {
             } else {
                 break;
             };
-            if self.ignored.binary_search(&item.pair).is_ok() {
+            if !item.may_touch_on(span) || self.ignored.binary_search(&item.pair).is_ok() {
                 continue;
             }
             let pair = item.pair as usize;
@@ -757,20 +789,24 @@ impl Solver {
                     e_likely = e_likely.min(c.max(lo));
                 }
             }
+            // (Rounding that crossed the ends over keeps the whole node.)
+            let (from, to) = (
+                to_time(lo, -1.0).max(span.lo),
+                to_time(hi, 1.0).min(span.hi),
+            );
             self.arena.push(Alive {
                 pair: item.pair,
                 axes,
+                window: if from <= to {
+                    TimeSpan::new(from, to)
+                } else {
+                    span
+                },
             });
         }
         if e_lo > e_hi {
             return None;
         }
-        let (m, h) = span.center_radius();
-        // τ = m + h·e takes two roundings: step out by a few ulps of the sum.
-        let to_time = |e: f64, direction: f64| {
-            let t = m + h * e;
-            t + direction * 4.0 * f64::EPSILON * (m.abs() + (h * e).abs())
-        };
         let lo = to_time(e_lo, -1.0).max(span.lo);
         let hi = to_time(e_hi, 1.0).min(span.hi);
         let clipped = if lo <= hi {
