@@ -334,8 +334,8 @@ impl Solver {
         // Pairs touching at the very start: the answer, or left out. The
         // check is made lazily, on the node that reaches the start (depth-
         // first, earlier first: while the start is open, every node does)
-        // when its bounds see some pair touching from its start on, or
-        // before a report at the start. Most searches never make it: some
+        // when its exact axes say some pair surely touches from its start
+        // on, or before a report at the start. Most searches never make it: some
         // node's clip leaves the start, or proves every pair apart there,
         // first. (Made as soon as a root saw a touch anywhere, it was a sixth
         // of the slowest hull–mesh query, for a start the next clip left.)
@@ -369,8 +369,10 @@ impl Solver {
             if start_open && node.span.lo > span.lo {
                 start_open = false;
             }
-            if start_open && node.sure_at_start {
-                // A sure touch at the start: the check before following it.
+            let report = self.decide(gaps, options, frame, &node, &mut out, &mut stats);
+            if start_open && (node.sure_at_start || report.is_some()) {
+                // A sure touch at the start, or a report of the start itself:
+                // the deferred check first.
                 start_open = false;
                 match self
                     .deferred_start_check(gaps, span, frame, &node, ignore, &mut out, &mut stats)
@@ -380,20 +382,9 @@ impl Solver {
                     StartCheck::Clear => {}
                 }
             }
-            let Some(time) = self.decide(gaps, options, frame, &node, &mut out, &mut stats) else {
+            let Some(time) = report else {
                 continue;
             };
-            if start_open {
-                // About to report the start itself.
-                start_open = false;
-                match self
-                    .deferred_start_check(gaps, span, frame, &node, ignore, &mut out, &mut stats)
-                {
-                    StartCheck::Touching(touching) => return Ok(touching),
-                    StartCheck::Again => continue,
-                    StartCheck::Clear => {}
-                }
-            }
             return Ok(hit(time, node.earliest_pair, stats));
         }
         Ok(SolveOutcome {
