@@ -369,13 +369,15 @@ impl Solver {
             if start_open && node.span.lo > span.lo {
                 start_open = false;
             }
+            let queued = self.stack.len();
             let report = self.decide(gaps, options, frame, &node, &mut out, &mut stats);
             if start_open && (node.sure_at_start || report.is_some()) {
                 // A sure touch at the start, or a report of the start itself:
                 // the deferred check first.
                 start_open = false;
+                let revisit = (frame, queued);
                 match self
-                    .deferred_start_check(gaps, span, frame, &node, ignore, &mut out, &mut stats)
+                    .deferred_start_check(gaps, span, &node, revisit, ignore, &mut out, &mut stats)
                 {
                     StartCheck::Touching(touching) => return Ok(touching),
                     StartCheck::Again => continue,
@@ -395,19 +397,21 @@ impl Solver {
         })
     }
 
-    /// The start check on `frame`, a node that reaches the start of `span`,
-    /// visited as `node`: the answer when a pair touches there and touches
-    /// are reported; `Again` when pairs are now left out (the node is
-    /// queued to be visited without them: its visit and whatever it queued
-    /// counted them). Only the node's surviving pairs are checked: it
+    /// The start check on a node that reaches the start of `span`, visited
+    /// as `node` from `frame`: the answer when a pair touches there and
+    /// touches are reported; `Again` when pairs are now left out. Then the
+    /// node is queued to be visited without them, in place of the
+    /// sub-nodes it queued (the stack above `queued`: they counted those
+    /// pairs, and their pairs lie in the part of the arena the new visit
+    /// writes again). Only the node's surviving pairs are checked: it
     /// proved the others apart over its span, its start among it.
     #[allow(clippy::too_many_arguments)]
     fn deferred_start_check<E: Enclosure, G: GapSet<E>>(
         &mut self,
         gaps: &mut G,
         span: TimeSpan,
-        frame: Frame,
         node: &Visited,
+        (frame, queued): (Frame, usize),
         ignore: bool,
         out: &mut [E; MAX_AXES],
         stats: &mut SolveStats,
@@ -420,6 +424,7 @@ impl Solver {
         if self.ignored.is_empty() {
             return StartCheck::Clear;
         }
+        self.stack.truncate(queued);
         self.stack.push(frame);
         StartCheck::Again
     }

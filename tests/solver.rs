@@ -337,6 +337,37 @@ impl<E: Enclosure> GapSet<E> for PolySet {
     }
 }
 
+/// A random set for case `case`: 1–5 pairs of 1–`axes` cubic axes, their
+/// constant terms in `starts`. Every other case cuts wide nodes straight
+/// into pieces (what a fast-turning pair asks for), as narrow as 1/300 of
+/// the step, and every other pair of cases claims its axes are not exact.
+fn random_set(rng: &mut Rng, case: usize, starts: (f64, f64), axes: usize) -> PolySet {
+    let pairs = (0..1 + rng.below(5))
+        .map(|_| {
+            (0..1 + rng.below(axes))
+                .map(|_| {
+                    [
+                        rng.range(starts.0, starts.1),
+                        rng.range(-2.0, 2.0),
+                        rng.range(-2.0, 2.0),
+                        rng.range(-1.0, 1.0),
+                    ]
+                })
+                .collect()
+        })
+        .collect();
+    let useful = if case % 2 == 0 {
+        f64::INFINITY
+    } else {
+        rng.range(0.003, 0.4)
+    };
+    PolySet {
+        pairs,
+        useful,
+        exact: case % 4 < 2,
+    }
+}
+
 #[test]
 fn and_or_sets_match_brute_force() {
     let mut rng = Rng::new(3);
@@ -345,34 +376,7 @@ fn and_or_sets_match_brute_force() {
     let samples = 20_000;
     let mut hits = 0;
     for case in 0..1500 {
-        let pairs = (0..1 + rng.below(5))
-            .map(|_| {
-                (0..1 + rng.below(4))
-                    .map(|_| {
-                        [
-                            rng.range(-0.2, 1.0),
-                            rng.range(-2.0, 2.0),
-                            rng.range(-2.0, 2.0),
-                            rng.range(-1.0, 1.0),
-                        ]
-                    })
-                    .collect()
-            })
-            .collect();
-        // Every other case cuts wide nodes straight into pieces (what a
-        // fast-turning pair asks for), as narrow as 1/300 of the step.
-        let useful = if case % 2 == 0 {
-            f64::INFINITY
-        } else {
-            rng.range(0.003, 0.4)
-        };
-        // Every other pair of cases claims its axes are not exact.
-        let exact = case % 4 < 2;
-        let mut set = PolySet {
-            pairs,
-            useful,
-            exact,
-        };
+        let mut set = random_set(&mut rng, case, (-0.2, 1.0), 4);
         let truth = set.brute_force(samples);
         for kind in Arithmetic::ALL {
             let options = SolveOptions {
@@ -429,6 +433,66 @@ fn and_or_sets_match_brute_force() {
         }
         hits += usize::from(truth.is_some());
     }
+    assert!(hits > 200, "the random sets should hold many hits ({hits})");
+}
+
+#[test]
+fn ignored_initial_contacts_match_brute_force() {
+    use affine_ccd::InitialContact;
+    // Random sets as above, many of whose pairs touch at the start (every
+    // axis ≤ 0 at τ = 0): those are left out, and the search must find the
+    // earliest touch of the others, never late, whichever node first sees
+    // the touch at the start (a sure one on exact axes, a likely one, or
+    // only the report).
+    let mut rng = Rng::new(11);
+    let mut solver = Solver::new();
+    let eps = 1.0e-4;
+    let samples = 20_000;
+    let (mut left_out, mut hits) = (0, 0);
+    for case in 0..1500 {
+        let mut set = random_set(&mut rng, case, (-0.5, 0.6), 3);
+        let at_start = |axes: &Vec<[f64; 4]>| axes.iter().all(|c| c[0] <= 0.0);
+        left_out += set.pairs.iter().filter(|axes| at_start(axes)).count();
+        let others: Vec<&Vec<[f64; 4]>> = set.pairs.iter().filter(|axes| !at_start(axes)).collect();
+        let truth = (0..=samples).map(|i| i as f64 / samples as f64).find(|&t| {
+            others
+                .iter()
+                .any(|axes| axes.iter().all(|c| PolySet::value(c, t) <= 0.0))
+        });
+        for kind in Arithmetic::ALL {
+            let options = SolveOptions {
+                epsilon: eps,
+                initial_contact: InitialContact::Ignore,
+                ..SolveOptions::default()
+            };
+            let got = solve_in(kind, &mut solver, &mut set, &options).unwrap();
+            assert_ne!(got.status, RootStatus::InitiallyTouching, "case {case}");
+            if let Some(pair) = got.pair {
+                // A pair left out is never the one reported.
+                assert!(
+                    !at_start(&set.pairs[pair]),
+                    "case {case} {kind:?}: pair {pair}"
+                );
+            }
+            if let Some(t) = truth {
+                assert_ne!(
+                    got.status,
+                    RootStatus::Separated,
+                    "case {case} {kind:?}: missed {t}"
+                );
+                assert!(
+                    got.time <= t,
+                    "case {case} {kind:?}: {} after {t}",
+                    got.time
+                );
+            }
+        }
+        hits += usize::from(truth.is_some());
+    }
+    assert!(
+        left_out > 300,
+        "many pairs should touch at the start ({left_out})"
+    );
     assert!(hits > 200, "the random sets should hold many hits ({hits})");
 }
 
