@@ -735,6 +735,20 @@ impl Solver {
             let t = m + h * e;
             t + direction * 4.0 * f64::EPSILON * (m.abs() + (h * e).abs())
         };
+        // `[lo, hi]` in `e` as times within the node, rounded outward (the
+        // whole node where rounding crossed the ends over): a pair's
+        // window, and the clipped node.
+        let to_span = |lo: f64, hi: f64| {
+            let (from, to) = (
+                to_time(lo, -1.0).max(span.lo),
+                to_time(hi, 1.0).min(span.hi),
+            );
+            if from <= to {
+                TimeSpan::new(from, to)
+            } else {
+                span
+            }
+        };
         // Pairs to look at: the frame's list (left intact for its sibling
         // node), then any sub-pairs that composites expand into.
         let mut cursor = frame.start;
@@ -785,32 +799,16 @@ impl Solver {
                     e_likely = e_likely.min(c.max(lo));
                 }
             }
-            // (Rounding that crossed the ends over keeps the whole node.)
-            let (from, to) = (
-                to_time(lo, -1.0).max(span.lo),
-                to_time(hi, 1.0).min(span.hi),
-            );
             self.arena.push(Alive {
                 pair: item.pair,
                 axes,
-                window: if from <= to {
-                    TimeSpan::new(from, to)
-                } else {
-                    span
-                },
+                window: to_span(lo, hi),
             });
         }
         if e_lo > e_hi {
             return None;
         }
-        let lo = to_time(e_lo, -1.0).max(span.lo);
-        let hi = to_time(e_hi, 1.0).min(span.hi);
-        let clipped = if lo <= hi {
-            TimeSpan::new(lo, hi)
-        } else {
-            // Rounding crossed the ends over; keep the node whole.
-            span
-        };
+        let clipped = to_span(e_lo, e_hi);
         // A time by which some pair surely touches, inside the clipped node.
         let inside = |t: &f64| *t > clipped.lo && *t < clipped.hi;
         let likely = (e_likely <= 1.0)

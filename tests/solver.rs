@@ -280,9 +280,19 @@ impl PolySet {
 
     /// Earliest sample time at which some pair has every axis ≤ 0.
     fn brute_force(&self, samples: usize) -> Option<f64> {
+        self.brute_force_among(samples, |_| true)
+    }
+
+    /// [`PolySet::brute_force`] over the pairs `keep` accepts.
+    fn brute_force_among(
+        &self,
+        samples: usize,
+        keep: impl Fn(&Vec<[f64; 4]>) -> bool,
+    ) -> Option<f64> {
         (0..=samples).map(|i| i as f64 / samples as f64).find(|&t| {
             self.pairs
                 .iter()
+                .filter(|axes| keep(axes))
                 .any(|axes| axes.iter().all(|c| PolySet::value(c, t) <= 0.0))
         })
     }
@@ -453,12 +463,7 @@ fn ignored_initial_contacts_match_brute_force() {
         let mut set = random_set(&mut rng, case, (-0.5, 0.6), 3);
         let at_start = |axes: &Vec<[f64; 4]>| axes.iter().all(|c| c[0] <= 0.0);
         left_out += set.pairs.iter().filter(|axes| at_start(axes)).count();
-        let others: Vec<&Vec<[f64; 4]>> = set.pairs.iter().filter(|axes| !at_start(axes)).collect();
-        let truth = (0..=samples).map(|i| i as f64 / samples as f64).find(|&t| {
-            others
-                .iter()
-                .any(|axes| axes.iter().all(|c| PolySet::value(c, t) <= 0.0))
-        });
+        let truth = set.brute_force_among(samples, |axes| !at_start(axes));
         for kind in Arithmetic::ALL {
             let options = SolveOptions {
                 epsilon: eps,
