@@ -19,8 +19,9 @@
 //! the shapes are apart there (the best single separating direction), the
 //! penetration normal when they overlap (no direction separates then, but
 //! the approach direction still clips the node well; on a node wider than
-//! 1 % of the step, the shapes' own box or cylinder axis along which they
-//! overlap least stands in for it, see `SupportMap::shallowest_axis`, and
+//! 1 % of the step, the shapes' own box, cylinder or triangle axis along
+//! which they overlap least stands in for it, see
+//! `SupportMap::shallowest_axis`, and
 //! on a narrower one of a pair with a curved shape, the last node's
 //! direction, see `SupportMap::direction`). As
 //! nodes shrink the direction becomes right for the whole node, and the
@@ -177,7 +178,7 @@ impl SupportMap {
                 Core::Cuboid(_) | Core::Cylinder { .. } | Core::Cone { .. }
             )
         };
-        let own_axes = axes(&a.core) || axes(&b.core);
+        let own_axes = axes(&a.core) || axes(&b.core) || face_a.is_some() || face_b.is_some();
         let curved = |c: &Convex| {
             c.border > 0.0
                 || matches!(
@@ -394,13 +395,15 @@ impl SupportMap {
 
     /// For overlapping shapes (at the poses `rel`, `b`'s in `a`'s frame):
     /// of the shapes' own face and axis directions (a box's faces, a
-    /// cylinder's or cone's axis), the one along which
+    /// cylinder's or cone's axis, a triangle's normal), the one along which
     /// they overlap least, in `a`'s frame, pointing from `a` towards `b`.
     /// parry's penetration normal is that direction over *all* directions
     /// (its EPA, most of a cylinder query's cost); where a box face or a
     /// cylinder's axis meets the other shape, as it mostly does, the two
-    /// agree. `None` when neither shape has such a direction (hulls,
-    /// triangles, capsules: `own_axes` is false).
+    /// agree; a hull sunk into a mesh's triangle mostly overlaps it least
+    /// along the triangle's normal (hull–mesh queries at 200–1000 rad/s:
+    /// 1.3 % fewer instructions, the slowest one 7 %). `None` when neither
+    /// shape has such a direction (hulls, capsules: `own_axes` is false).
     fn shallowest_axis(&self, rel: &Isometry3<f64>) -> Option<Vector3<f64>> {
         const AXES: [[f64; 3]; 3] = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
         let own = |core: &Core| -> &'static [[f64; 3]] {
@@ -412,11 +415,16 @@ impl SupportMap {
         };
         let offset = rel.translation.vector;
         let mut best: Option<(f64, Vector3<f64>)> = None;
-        let candidates = own(&self.a.core).iter().map(|u| Vector3::from(*u)).chain(
-            own(&self.b.core)
-                .iter()
-                .map(|u| rel.rotation * Vector3::from(*u)),
-        );
+        let candidates = own(&self.a.core)
+            .iter()
+            .map(|u| Vector3::from(*u))
+            .chain(self.face_a)
+            .chain(
+                own(&self.b.core)
+                    .iter()
+                    .map(|u| rel.rotation * Vector3::from(*u)),
+            )
+            .chain(self.face_b.map(|f| rel.rotation * f));
         for u in candidates {
             let n = if u.dot(&offset) >= 0.0 { u } else { -u };
             // The gap along `n` (negative: the overlap).
