@@ -221,6 +221,11 @@ impl Enclosure for Affine {
     }
 
     #[inline]
+    fn line(&self) -> (f64, f64, f64) {
+        (self.c, self.s, self.r)
+    }
+
+    #[inline]
     fn between(lower: (f64, f64), upper: (f64, f64)) -> Affine {
         let (c, s, r) = super::middle_line(lower, upper);
         Affine::checked(c, s, r)

@@ -198,6 +198,15 @@ pub trait Enclosure:
     /// Intervals give `(hi, 0)`.
     fn linear_upper(&self) -> (f64, f64);
 
+    /// `(c, s, r)` such that the enclosed function lies within
+    /// `c + s·e ± r` for every `e ∈ [−1, 1]`: by default the line midway
+    /// between [`Self::linear_lower`] and [`Self::linear_upper`]. An affine
+    /// form is such a line already, and gives its own parts.
+    #[inline]
+    fn line(&self) -> (f64, f64, f64) {
+        middle_line(self.linear_lower(), self.linear_upper())
+    }
+
     /// An enclosure of any function that lies between the lines `lower`
     /// and `upper` (each `(a, b)` for `a + b·e`) at every `e ∈ [−1, 1]`.
     /// By default the range between them; forms with a slope keep the

@@ -30,7 +30,7 @@
 //! border's `|d|` costs nothing.
 
 use crate::enclosure::rounding::{bound, err, up};
-use crate::enclosure::{Enclosure, Interval, middle_line};
+use crate::enclosure::{Enclosure, Interval};
 use crate::error::{CcdError, check_finite};
 use crate::motion::{column, row};
 use nalgebra::{Matrix3, Vector3};
@@ -410,37 +410,45 @@ fn radial<E: Enclosure>(d: &Vector3<E>, norm: f64) -> E {
 /// node the bound keeps a slope, where the greatest of the vertices'
 /// enclosures fell back to a range.
 fn vertex_reach<E: Enclosure>(vs: &[Vector3<f64>], d: &Vector3<E>) -> E {
+    // Past this a component's parts could overflow a vertex's products
+    // (vertices are finite `f32` values, under 3.5e38): the whole line.
+    const LARGEST: f64 = 1.0e250;
     if vs.is_empty() {
         return E::constant(f64::INFINITY);
     }
-    // `d`'s components as `c + s·e ± r`.
-    let [(c0, s0, r0), (c1, s1, r1), (c2, s2, r2)] =
-        [d.x, d.y, d.z].map(|k| middle_line(k.linear_lower(), k.linear_upper()));
+    // `d`'s components as `c + s·e ± r`, and their sizes `|c| + |s| + r`
+    // (a vertex's terms below add up to at most `|v|·w`).
+    let [(c0, s0, r0), (c1, s1, r1), (c2, s2, r2)] = [d.x, d.y, d.z].map(|k| k.line());
+    let [w0, w1, w2] =
+        [(c0, s0, r0), (c1, s1, r1), (c2, s2, r2)].map(|(c, s, r)| c.abs() + s.abs() + r);
+    // (Written so that a NaN fails it too.)
+    if !(w0 <= LARGEST && w1 <= LARGEST && w2 <= LARGEST) {
+        return E::from_interval(Interval::ENTIRE);
+    }
     // Per vertex `v·d ∈ a + b·e ± rho`; the chord's ends (the greatest
     // upper line at `e = ±1`) and the lower line highest at `e = 0`.
     let (mut top_plus, mut top_minus) = (f64::NEG_INFINITY, f64::NEG_INFINITY);
     let mut low = (f64::NEG_INFINITY, 0.0);
-    let mut finite = true;
+    let mut size = 0.0_f64;
     for v in vs {
-        let (ac, bc, ec) = (v.x * c0, v.y * c1, v.z * c2);
-        let (as_, bs, es) = (v.x * s0, v.y * s1, v.z * s2);
-        let (a, b) = (ac + bc + ec, as_ + bs + es);
-        let rho = v.x.abs() * r0 + v.y.abs() * r1 + v.z.abs() * r2;
-        // The roundings of the three sums and of the lines below (each
-        // under a half-ulp of terms these magnitudes bound).
-        let terms = ac.abs() + bc.abs() + ec.abs() + as_.abs() + bs.abs() + es.abs();
-        let rho = rho + 8.0 * f64::EPSILON * (terms + rho) + f64::MIN_POSITIVE;
+        let (x, y, z) = (v.x.abs(), v.y.abs(), v.z.abs());
+        let a = v.x * c0 + v.y * c1 + v.z * c2;
+        let b = v.x * s0 + v.y * s1 + v.z * s2;
+        let rho = x * r0 + y * r1 + z * r2;
+        size = size.max(x * w0 + y * w1 + z * w2);
         let (plus, minus, mid) = (a + b + rho, a - b + rho, a - rho);
-        finite &= (plus + minus + mid).is_finite();
         top_plus = top_plus.max(plus);
         top_minus = top_minus.max(minus);
         if mid > low.0 {
             low = (mid, b);
         }
     }
-    if !finite {
-        return E::from_interval(Interval::ENTIRE);
-    }
+    // The roundings of every vertex's sums and lines above, and of the
+    // padding itself: each a few half-ulps of terms `size` bounds. One
+    // pad for all vertices, added once to the greatest and the highest.
+    let pad = 8.0 * f64::EPSILON * bound(size) + f64::MIN_POSITIVE;
+    let (top_plus, top_minus) = (top_plus + pad, top_minus + pad);
+    let low = (low.0 - pad, low.1);
     // The chord through `(−1, top_minus)` and `(1, top_plus)`, raised by
     // the roundings of its centre and slope.
     let slack = 2.0 * f64::EPSILON * (top_plus.abs() + top_minus.abs());
@@ -704,5 +712,36 @@ mod tests {
             let tolerance = 1.0e-12 * (d.norm() + f64::MIN_POSITIVE);
             prop_assert!(reach <= interval + tolerance, "{reach:e} over {interval:e}");
         }
+    }
+
+    /// A direction too large for a vertex's products to stay finite, or
+    /// not finite at all, reaches anywhere: the whole line, never a bound
+    /// a NaN or an overflow slipped past.
+    #[test]
+    fn a_direction_beyond_the_products_reaches_anywhere() {
+        let vs = [
+            Vector3::new(1.0e38, -2.0, 0.0),
+            Vector3::new(-1.0, 0.0, 3.0e38),
+        ];
+        let along = |k: f64| Affine {
+            c: k,
+            s: 0.0,
+            r: 0.0,
+        };
+        for d in [
+            Vector3::new(along(1.0e300), along(0.0), along(0.0)),
+            Vector3::new(along(0.0), along(0.0), Affine::ENTIRE),
+            Vector3::new(along(f64::NAN), along(1.0), along(1.0)),
+        ] {
+            let range = vertex_reach(&vs, &d).range();
+            assert!(
+                range.lo == f64::NEG_INFINITY && range.hi == f64::INFINITY,
+                "{range:?}"
+            );
+        }
+        // Just under the limit the bound is finite and holds both vertices.
+        let d = Vector3::new(along(1.0e250), along(1.0), along(1.0e250));
+        let range = vertex_reach(&vs, &d).range();
+        assert!(range.hi.is_finite() && range.hi >= 3.0e288, "{range:?}");
     }
 }
