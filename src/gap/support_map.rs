@@ -139,6 +139,9 @@ pub(crate) struct SupportMap {
     closed_form: bool,
     /// Some shape has its own axes for [`SupportMap::shallowest_axis`].
     own_axes: bool,
+    /// A triangle's normal is one of them: against a hull (which has no
+    /// axes of its own, and whose EPA visits every vertex).
+    face_axes: bool,
     /// Some shape has a point test ([`Convex::contains`]): a touch check
     /// may find a point in both (`SupportMap::overlap_witnessed`).
     witnesses: bool,
@@ -178,7 +181,10 @@ impl SupportMap {
                 Core::Cuboid(_) | Core::Cylinder { .. } | Core::Cone { .. }
             )
         };
-        let own_axes = axes(&a.core) || axes(&b.core) || face_a.is_some() || face_b.is_some();
+        // A triangle against a hull: the triangle's normal is an own axis.
+        let hull = |c: &Core| matches!(c, Core::Polyhedron(_));
+        let face_axes = (face_a.is_some() && hull(&b.core)) || (face_b.is_some() && hull(&a.core));
+        let own_axes = axes(&a.core) || axes(&b.core) || face_axes;
         let curved = |c: &Convex| {
             c.border > 0.0
                 || matches!(
@@ -192,6 +198,7 @@ impl SupportMap {
             face_a,
             face_b,
             own_axes,
+            face_axes,
             a,
             b,
             shape_a,
@@ -395,15 +402,17 @@ impl SupportMap {
 
     /// For overlapping shapes (at the poses `rel`, `b`'s in `a`'s frame):
     /// of the shapes' own face and axis directions (a box's faces, a
-    /// cylinder's or cone's axis, a triangle's normal), the one along which
-    /// they overlap least, in `a`'s frame, pointing from `a` towards `b`.
+    /// cylinder's or cone's axis, a triangle's normal against a hull), the
+    /// one along which they overlap least, in `a`'s frame, pointing from
+    /// `a` towards `b`.
     /// parry's penetration normal is that direction over *all* directions
     /// (its EPA, most of a cylinder query's cost); where a box face or a
     /// cylinder's axis meets the other shape, as it mostly does, the two
     /// agree; a hull sunk into a mesh's triangle mostly overlaps it least
     /// along the triangle's normal (hull–mesh queries at 200–1000 rad/s:
-    /// 1.3 % fewer instructions, the slowest one 7 %). `None` when neither
-    /// shape has such a direction (hulls, capsules: `own_axes` is false).
+    /// 1.3 % fewer instructions, the slowest one 7 %; a capsule's on a
+    /// flat mesh cost more with it, and it is not offered there). `None`
+    /// when neither shape has such a direction (`own_axes` is false).
     fn shallowest_axis(&self, rel: &Isometry3<f64>) -> Option<Vector3<f64>> {
         const AXES: [[f64; 3]; 3] = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
         let own = |core: &Core| -> &'static [[f64; 3]] {
@@ -418,13 +427,17 @@ impl SupportMap {
         let candidates = own(&self.a.core)
             .iter()
             .map(|u| Vector3::from(*u))
-            .chain(self.face_a)
+            .chain(self.face_a.filter(|_| self.face_axes))
             .chain(
                 own(&self.b.core)
                     .iter()
                     .map(|u| rel.rotation * Vector3::from(*u)),
             )
-            .chain(self.face_b.map(|f| rel.rotation * f));
+            .chain(
+                self.face_b
+                    .filter(|_| self.face_axes)
+                    .map(|f| rel.rotation * f),
+            );
         for u in candidates {
             let n = if u.dot(&offset) >= 0.0 { u } else { -u };
             // The gap along `n` (negative: the overlap).
