@@ -14,7 +14,6 @@ use super::Side;
 use super::primitives::{closest_segment_segment, direction, dot_const, skin_norm_const};
 use crate::enclosure::rounding::up;
 use crate::enclosure::{Enclosure, TimeSpan};
-use crate::motion::Trajectory;
 use nalgebra::Vector3;
 
 /// A ball centred on its frame's origin against a segment fixed in its
@@ -65,7 +64,7 @@ impl BallSegment {
         }
         if axes >> 2 & 1 == 1 {
             let mid = span.lo + 0.5 * (span.hi - span.lo);
-            let (pa, pb) = (a.motion.pose_at(mid), b.motion.pose_at(mid));
+            let (pa, pb) = (a.pose_at(mid), b.pose_at(mid));
             let centre = pb
                 .inverse_transform_point(&pa.translation.vector.into())
                 .coords;

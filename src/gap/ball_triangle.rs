@@ -30,7 +30,6 @@ use super::primitives::{
 };
 use crate::enclosure::rounding::up;
 use crate::enclosure::{Enclosure, TimeSpan};
-use crate::motion::Trajectory;
 use nalgebra::Vector3;
 
 #[derive(Clone, Debug)]
@@ -113,7 +112,7 @@ impl BallTriangle {
         b: &Side<E>,
     ) -> Option<Vector3<f64>> {
         let mid = span.lo + 0.5 * (span.hi - span.lo);
-        let (pa, pb) = (a.motion.pose_at(mid), b.motion.pose_at(mid));
+        let (pa, pb) = (a.pose_at(mid), b.pose_at(mid));
         let centre = pb.inverse_transform_point(&pa.translation.vector.into());
         let [c0, c1, c2] = &self.corners;
         let closest = closest_on_triangle(&centre.coords, c0, c1, c2);

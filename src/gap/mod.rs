@@ -53,11 +53,18 @@ pub(crate) use triangle_triangle::TriangleTriangle;
 use crate::convert::vec_from_glam;
 use crate::enclosure::{Enclosure, TimeSpan};
 use crate::error::{CcdError, check_finite};
-use crate::motion::{Motion, Pose};
-use nalgebra::Vector3;
+use crate::motion::{Motion, Pose, Trajectory};
+use nalgebra::{Isometry3, Vector3};
 use rapier3d::parry::math::Vector;
 use rapier3d::parry::shape::{Ball, Segment, Shape, Triangle, TypedShape};
+use std::cell::Cell;
 use std::sync::Arc;
+
+/// A frame's exact pose at one time, kept where the search keeps its
+/// frames: the pairs of a node read their frames at the node's middle, and
+/// a hull against each triangle of a mesh asks for the same two poses
+/// (a turning pose costs a sine and a cosine).
+pub(crate) type KeptPose = Cell<Option<(f64, Isometry3<f64>)>>;
 
 /// One shape of a pair as an axis function sees it on a node.
 pub(crate) struct Side<'p, E: Enclosure> {
@@ -68,6 +75,25 @@ pub(crate) struct Side<'p, E: Enclosure> {
     pub pose: &'p Pose<E>,
     /// The frame's whole motion (for adaptive choices at the node's middle).
     pub motion: &'p Motion,
+    /// Where the search keeps the frame's last exact pose, if it does.
+    pub kept: Option<&'p KeptPose>,
+}
+
+impl<E: Enclosure> Side<'_, E> {
+    /// The frame's exact pose at `t`: the kept one when it is for `t`.
+    pub fn pose_at(&self, t: f64) -> Isometry3<f64> {
+        let Some(kept) = self.kept else {
+            return self.motion.pose_at(t);
+        };
+        if let Some((at, pose)) = kept.get()
+            && at == t
+        {
+            return pose;
+        }
+        let pose = self.motion.pose_at(t);
+        kept.set(Some((t, pose)));
+        pose
+    }
 }
 
 /// Each side of a pair seen from the other over a node, where the search
@@ -466,5 +492,35 @@ mod tests {
         let mut out = [iv(1.0, 2.0), iv(-1.0, 1.0)];
         assert!(!apart_by(&mut out, 0b10, 0b11));
         assert!(out[0].range().lo > 0.0);
+    }
+
+    /// A kept pose stands for its own time only: a side asked at another
+    /// time (a sub-node's middle) gets the motion's pose there, and keeps
+    /// that one next.
+    #[test]
+    fn a_kept_pose_is_read_only_at_its_own_time() {
+        use super::{KeptPose, Side, Trajectory};
+        use crate::enclosure::Affine;
+        use crate::motion::Motion;
+        use nalgebra::{Isometry3, Point3, Vector3};
+        let motion = Motion::from_velocities(
+            Isometry3::identity(),
+            Point3::new(0.1, 0.0, 0.0),
+            Vector3::new(1.0, 2.0, 3.0),
+            Vector3::new(0.0, 40.0, 5.0),
+            1.0 / 60.0,
+        )
+        .expect("a finite motion");
+        let pose = motion.pose::<Affine>(crate::enclosure::TimeSpan::new(0.0, 1.0));
+        let kept = KeptPose::default();
+        let side = Side {
+            pose: &pose,
+            motion: &motion,
+            kept: Some(&kept),
+        };
+        for t in [0.25, 0.25, 0.75, 0.25, 1.0] {
+            assert_eq!(side.pose_at(t), motion.pose_at(t), "at {t}");
+            assert_eq!(kept.get().map(|(at, _)| at), Some(t));
+        }
     }
 }

@@ -707,7 +707,7 @@ impl SupportMap {
         out: &mut [E],
     ) {
         let mid = span.lo + 0.5 * (span.hi - span.lo);
-        let (ia, ib) = (a.motion.pose_at(mid), b.motion.pose_at(mid));
+        let (ia, ib) = (a.pose_at(mid), b.pose_at(mid));
         // The frames' origins' offset, read by every axis.
         let d = b.pose.translation - a.pose.translation;
         // Axis 0: the direction `n`, fixed in the world.
@@ -1077,10 +1077,12 @@ mod tests {
             Side {
                 pose: &pa,
                 motion: &ma,
+                kept: None,
             },
             Side {
                 pose: &pb,
                 motion: &mb,
+                kept: None,
             },
         );
         let mut out = [Affine::constant(0.0); 3];

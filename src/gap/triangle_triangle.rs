@@ -27,7 +27,7 @@ use super::primitives::{
 };
 use super::{Relative, Side};
 use crate::enclosure::{Enclosure, TimeSpan, least_greatest};
-use crate::motion::{Pose, Trajectory};
+use crate::motion::Pose;
 use nalgebra::{Isometry3, Vector3};
 
 /// Two triangles, each in its own frame.
@@ -151,7 +151,7 @@ impl TriangleTriangle {
         b: &Side<E>,
     ) -> Option<Vector3<f64>> {
         let mid = span.lo + 0.5 * (span.hi - span.lo);
-        let rel: Isometry3<f64> = b.motion.pose_at(mid).inverse() * a.motion.pose_at(mid);
+        let rel: Isometry3<f64> = b.pose_at(mid).inverse() * a.pose_at(mid);
         let pa = self.a.map(|x| rel.transform_point(&x.into()).coords);
         let pb = self.b;
         let mut best: Option<(f64, Vector3<f64>, Vector3<f64>)> = None;

@@ -5,6 +5,7 @@
 //! read.
 
 use crate::enclosure::{Enclosure, TimeSpan};
+use crate::gap::KeptPose;
 use crate::motion::{Motion, Pose, Trajectory, column, row};
 use nalgebra::{Isometry3, Matrix3, Vector3};
 use std::collections::HashMap;
@@ -38,12 +39,15 @@ pub(super) struct Frames<E: Enclosure> {
     child_frames: HashMap<(u32, u32), u32>,
     /// `(to, from, pose of from in to)` for this node.
     relative: Vec<(u32, u32, Pose<E>)>,
+    /// Per frame: its last exact pose (`Side::pose_at`).
+    kept: Vec<KeptPose>,
 }
 
 impl<E: Enclosure> Frames<E> {
     pub fn new(defs: Vec<FrameDef>, rotation_read: Vec<bool>) -> Frames<E> {
         Frames {
             poses: vec![None; defs.len()],
+            kept: (0..defs.len()).map(|_| KeptPose::default()).collect(),
             defs,
             rotation_read,
             child_frames: HashMap::new(),
@@ -58,6 +62,11 @@ impl<E: Enclosure> Frames<E> {
 
     pub fn motion(&self, index: u32) -> &Motion {
         &self.defs[index as usize].motion
+    }
+
+    /// Where frame `index`'s last exact pose is kept.
+    pub fn kept(&self, index: u32) -> &KeptPose {
+        &self.kept[index as usize]
     }
 
     /// Forgets the poses of the last node; a fixed frame's pose is the same
@@ -164,6 +173,7 @@ impl<E: Enclosure> Frames<E> {
             parent: Some((parent, rotation, local.translation.vector)),
         });
         self.poses.push(None);
+        self.kept.push(KeptPose::default());
         self.rotation_read.push(true);
         self.child_frames.insert((parent, index), id);
         id

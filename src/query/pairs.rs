@@ -381,13 +381,18 @@ impl<E: Enclosure> GapSet<E> for PairSet<'_, E> {
                     b_in_a: b_in_a.map(|kept| self.frames.kept_relative(kept)),
                     a_in_b: a_in_b.map(|kept| self.frames.kept_relative(kept)),
                 };
+                // So do their exact poses at the node's middle (a lone
+                // pair reads each once: nothing to keep).
+                let kept = |f| entry.piece.map(|_| self.frames.kept(f));
                 let a = Side {
                     pose: &pa,
                     motion: self.frames.motion(fa),
+                    kept: kept(fa),
                 };
                 let b = Side {
                     pose: &pb,
                     motion: self.frames.motion(fb),
+                    kept: kept(fb),
                 };
                 gap.eval(span, &a, &b, &relative, axes, out);
             }
