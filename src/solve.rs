@@ -890,14 +890,20 @@ fn judge_pair<E: Enclosure>(out: &[E], axes: u64) -> Option<Judgement> {
     let mut best_lo = f64::NEG_INFINITY;
     let (mut e_lo, mut e_hi) = (-1.0f64, 1.0f64);
     let (mut sure_lo, mut sure_hi) = (-1.0f64, 1.0f64);
-    // Each alive axis's upper bound (only those slots are read).
-    let mut highs = [0.0f64; MAX_AXES];
-    for k in set_bits(axes) {
+    // The alive axes' upper bounds, in the order of their bits: the first
+    // `KEPT_HIGHS` (every family's count but a few composites'; the rest
+    // are read again below). A short array: zeroing one of `MAX_AXES` was
+    // a `memset` call per judgement.
+    const KEPT_HIGHS: usize = 16;
+    let mut highs = [0.0f64; KEPT_HIGHS];
+    for (i, k) in set_bits(axes).enumerate() {
         let range = out[k].range();
         if range.lo > 0.0 {
             return None;
         }
-        highs[k] = range.hi;
+        if let Some(high) = highs.get_mut(i) {
+            *high = range.hi;
+        }
         best_lo = best_lo.max(range.lo);
         // a + b·e ≤ 0 where the axis may be non-positive.
         let (a, b) = out[k].linear_lower();
@@ -922,8 +928,9 @@ fn judge_pair<E: Enclosure>(out: &[E], axes: u64) -> Option<Judgement> {
     // An axis whose upper bound is below another's lower bound never
     // separates where that other one does not: drop it.
     let mut kept = axes;
-    for k in set_bits(axes) {
-        if highs[k] < best_lo {
+    for (i, k) in set_bits(axes).enumerate() {
+        let high = highs.get(i).copied().unwrap_or_else(|| out[k].range().hi);
+        if high < best_lo {
             kept &= !(1u64 << k);
         }
     }
