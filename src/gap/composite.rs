@@ -376,9 +376,17 @@ pub(crate) fn split_b(a: &PairSide, b: &PairSide) -> bool {
     }
 }
 
-/// The box `small` (in its own frame) carried into another frame by `rel`,
-/// as a centre and half-extents enclosed over the node.
-fn carried<E: Enclosure>(rel: &Pose<E>, small: &Bounds) -> (Vector3<E>, Vector3<E>) {
+/// A box carried into another frame: its low and high ends along each
+/// of that frame's axes, enclosed over the node (`None`: an empty box).
+pub(crate) type Carried<E> = Option<[[E; 3]; 2]>;
+
+/// The box `small` (in its own frame) carried into another frame by `rel`.
+/// The same for every part of the other side met on a node (a hull's box
+/// against each box of a mesh's tree): the search keeps it for the node.
+pub(crate) fn carried<E: Enclosure>(rel: &Pose<E>, small: &Bounds) -> Carried<E> {
+    if small.is_empty() {
+        return None;
+    }
     let (c, h) = small.centre_half();
     let centre = rel.transform_point(&c);
     let half = Vector3::from_fn(|i, _| {
@@ -386,27 +394,27 @@ fn carried<E: Enclosure>(rel: &Pose<E>, small: &Bounds) -> (Vector3<E>, Vector3<
             + rel.rotation[(i, 1)].abs() * h.y
             + rel.rotation[(i, 2)].abs() * h.z
     });
-    (centre, half)
+    Some([
+        std::array::from_fn(|i| centre[i] - half[i]),
+        std::array::from_fn(|i| centre[i] + half[i]),
+    ])
 }
 
-/// The six bounding axes of `small` (carried by `rel`) against `big`.
+/// The six bounding axes of a carried box against `big`.
 pub(crate) fn bounding_axes<E: Enclosure>(
-    rel: &Pose<E>,
-    small: &Bounds,
+    small: &Carried<E>,
     big: &Bounds,
     skin: f64,
     out: &mut [E],
 ) {
-    if small.is_empty() || big.is_empty() {
+    let Some([low, high]) = small.filter(|_| !big.is_empty()) else {
         // Nothing to touch: every axis far positive.
         out[..AXES].fill(E::constant(f64::MAX));
         return;
-    }
-    let (centre, half) = carried(rel, small);
+    };
     for i in 0..3 {
-        let (low, high) = (centre[i] - half[i], centre[i] + half[i]);
-        out[i] = -high + big.lo[i] - skin;
-        out[3 + i] = low - big.hi[i] - skin;
+        out[i] = -high[i] + big.lo[i] - skin;
+        out[3 + i] = low[i] - big.hi[i] - skin;
     }
 }
 

@@ -5,7 +5,7 @@ use super::frames::{FrameDef, Frames};
 use crate::enclosure::Interval;
 use crate::enclosure::{Enclosure, InArithmetic, TimeSpan};
 use crate::error::CcdError;
-use crate::gap::composite::{self, Bounds, PairSide, Region, SubRegion};
+use crate::gap::composite::{self, Bounds, Carried, PairSide, Region, SubRegion};
 use crate::gap::{self, PairGap, Relative, Side};
 use crate::solve::{GapSet, SolveOptions, SolveOutcome, Solver};
 use rapier3d::parry::shape::Shape;
@@ -73,6 +73,7 @@ impl InArithmetic for Search<'_, '_> {
             skin,
             scratch: Vec::new(),
             sweeps: Vec::new(),
+            carried: Vec::new(),
             prepared: Vec::new(),
             error: None,
         };
@@ -186,6 +187,9 @@ struct PairSet<'s, E: Enclosure> {
     /// other side's frame and its box), not by pair: the pairs of a hull
     /// with a mesh's tree nodes all share one.
     sweeps: Vec<(SweepKey, [Interval; 3])>,
+    /// The same sides' boxes carried into the split frame
+    /// (`composite::carried`), for the bounding axes.
+    carried: Vec<(SweepKey, Carried<E>)>,
     /// Whole shapes that composite children pair with, read once
     /// ([`gap::Prepared`]), by the shape's address (the shapes are borrowed
     /// for the whole query, so an address names one shape).
@@ -301,6 +305,7 @@ impl<E: Enclosure> GapSet<E> for PairSet<'_, E> {
     fn begin_node(&mut self, _span: TimeSpan) {
         self.frames.begin_node();
         self.sweeps.clear();
+        self.carried.clear();
     }
 
     /// A node over which the sides turn by more than [`TURN_PER_NODE`]
@@ -398,8 +403,21 @@ impl<E: Enclosure> GapSet<E> for PairSet<'_, E> {
             }
             PairContent::Composite(c) => {
                 let (small, big) = if c.split_b { (c.a, c.b) } else { (c.b, c.a) };
-                let rel = self.frames.relative(big.frame, small.frame, span);
-                composite::bounding_axes(&rel, &small.bounds, &big.bounds, self.skin, out);
+                let key = SweepKey {
+                    split: big.frame,
+                    other: small.frame,
+                    bounds: small.bounds,
+                };
+                let carried = match self.carried.iter().find(|(k, _)| *k == key) {
+                    Some((_, carried)) => *carried,
+                    None => {
+                        let rel = self.frames.relative(big.frame, small.frame, span);
+                        let carried = composite::carried(&rel, &small.bounds);
+                        self.carried.push((key, carried));
+                        carried
+                    }
+                };
+                composite::bounding_axes(&carried, &big.bounds, self.skin, out);
             }
             PairContent::Broken => out[0] = E::zero(),
         }
