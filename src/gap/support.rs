@@ -400,7 +400,7 @@ fn radial<E: Enclosure>(d: &Vector3<E>, norm: f64) -> E {
 
 /// `max_v v·d` over the vertices, from lines: over the node each
 /// component of `d` lies within a radius of a line (its enclosure's
-/// `linear_lower` and `linear_upper`), so each `v·d` lies between two
+/// [`Enclosure::line`]), so each `v·d` lies between two
 /// lines, and the greatest of them lies below the chord of the greatest
 /// upper line between the node's ends (a greatest of lines is convex)
 /// and above any one vertex's lower line (the one highest mid-node is

@@ -19,9 +19,9 @@
 //! the shapes are apart there (the best single separating direction), the
 //! penetration normal when they overlap (no direction separates then, but
 //! the approach direction still clips the node well; on a node wider than
-//! 1 % of the step, the shapes' own box, cylinder or triangle axis along
-//! which they overlap least stands in for it, see
-//! `SupportMap::shallowest_axis`, and
+//! 1 % of the step, the shapes' own box or cylinder axis, or a triangle's
+//! normal against a hull, along which they overlap least stands in for
+//! it, see `SupportMap::shallowest_axis`, and
 //! on a narrower one of a pair with a curved shape, the last node's
 //! direction, see `SupportMap::direction`). As
 //! nodes shrink the direction becomes right for the whole node, and the

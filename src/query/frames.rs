@@ -2,7 +2,7 @@
 //! compound part met during the search (a frame fixed to its parent at a
 //! local pose). Each frame's pose is enclosed once per node, on first use,
 //! for every pair that reads it; so are the relative poses composite pairs
-//! read.
+//! read, and each frame keeps its last exact pose (at a node's middle).
 
 use crate::enclosure::{Enclosure, TimeSpan};
 use crate::gap::KeptPose;
