@@ -378,6 +378,21 @@ fn random_set(rng: &mut Rng, case: usize, starts: (f64, f64), axes: usize) -> Po
     }
 }
 
+/// A search of a set whose earliest touch is at `t` (by brute force)
+/// neither misses it nor reports it late.
+fn assert_in_time(got: &SolveOutcome, t: f64, case: usize, kind: Arithmetic) {
+    assert_ne!(
+        got.status,
+        RootStatus::Separated,
+        "case {case} {kind:?}: missed {t}"
+    );
+    assert!(
+        got.time <= t,
+        "case {case} {kind:?}: {} after {t}",
+        got.time
+    );
+}
+
 #[test]
 fn and_or_sets_match_brute_force() {
     let mut rng = Rng::new(3);
@@ -396,16 +411,7 @@ fn and_or_sets_match_brute_force() {
             let got = solve_in(kind, &mut solver, &mut set, &options).unwrap();
             match truth {
                 Some(t) => {
-                    assert_ne!(
-                        got.status,
-                        RootStatus::Separated,
-                        "case {case} {kind:?}: missed {t}"
-                    );
-                    assert!(
-                        got.time <= t,
-                        "case {case} {kind:?}: {} after {t}",
-                        got.time
-                    );
+                    assert_in_time(&got, t, case, kind);
                     // The pair named must really reach ≤ 0 near the report.
                     let pair = &set.pairs[got.pair.unwrap()];
                     let reaches = (0..=200).any(|i| {
@@ -480,16 +486,7 @@ fn ignored_initial_contacts_match_brute_force() {
                 );
             }
             if let Some(t) = truth {
-                assert_ne!(
-                    got.status,
-                    RootStatus::Separated,
-                    "case {case} {kind:?}: missed {t}"
-                );
-                assert!(
-                    got.time <= t,
-                    "case {case} {kind:?}: {} after {t}",
-                    got.time
-                );
+                assert_in_time(&got, t, case, kind);
             }
         }
         hits += usize::from(truth.is_some());
