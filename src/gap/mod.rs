@@ -249,6 +249,15 @@ pub(crate) struct Built {
     pub swapped: bool,
 }
 
+impl Built {
+    /// Whether the family reads each side's rotation, in the caller's
+    /// order (see [`PairGap::reads_rotation`]).
+    pub fn reads_rotation(&self) -> [bool; 2] {
+        let [a, b] = self.gap.reads_rotation();
+        if self.swapped { [b, a] } else { [a, b] }
+    }
+}
+
 /// A whole convex shape read once for many pairs: the families' core and
 /// border, and parry's copy for the direction hint. A composite's parts
 /// meet the same convex shape again and again (a hull over a mesh:

@@ -352,12 +352,15 @@ fn pairs_of<'s>(
     for (i, m) in moving.iter().enumerate() {
         for (j, t) in targets.iter().enumerate() {
             let (a, b) = (i as u32, (moving.len() + j) as u32);
+            let mut blind = f64::INFINITY;
             let kind = if composite::is_composite(m.shape) || composite::is_composite(t.shape) {
                 composite::check_leaves(m.shape, t.shape, skin)?;
                 let (ia, ib) = (PairSide::whole(m.shape, a), PairSide::whole(t.shape, b));
                 PairContent::Composite(CompositePair::new(ia, ib))
             } else {
                 let built = gap::build(m.shape, t.shape, skin)?;
+                let [ra, rb] = built.reads_rotation();
+                blind = pairs::blind_width((m.shape, &m.motion, ra), (t.shape, &t.motion, rb));
                 PairContent::Leaf(built.gap, built.swapped)
             };
             let balls = Balls::new(&kind, (&m.motion, m.shape), (&t.motion, t.shape), skin);
@@ -367,8 +370,9 @@ fn pairs_of<'s>(
                 b,
                 balls,
                 piece: None,
-                moving: i,
-                target: j,
+                blind_width: blind,
+                moving: i as u32,
+                target: j as u32,
             });
         }
     }
