@@ -359,8 +359,7 @@ fn pairs_of<'s>(
                 PairContent::Composite(CompositePair::new(ia, ib))
             } else {
                 let built = gap::build(m.shape, t.shape, skin)?;
-                let [ra, rb] = built.reads_rotation();
-                blind = pairs::blind_width((m.shape, &m.motion, ra), (t.shape, &t.motion, rb));
+                blind = pairs::blind_width(&built, (m.shape, &m.motion), (t.shape, &t.motion));
                 PairContent::Leaf(built.gap, built.swapped)
             };
             let balls = Balls::new(&kind, (&m.motion, m.shape), (&t.motion, t.shape), skin);

@@ -7,7 +7,7 @@ use crate::enclosure::Interval;
 use crate::enclosure::{Enclosure, InArithmetic, TimeSpan};
 use crate::error::CcdError;
 use crate::gap::composite::{self, Bounds, Carried, PairSide, Region, SubRegion};
-use crate::gap::{self, PairGap, Relative, Side};
+use crate::gap::{self, Built, PairGap, Relative, Side};
 use crate::motion::Motion;
 use crate::solve::{GapSet, SolveOptions, SolveOutcome, Solver};
 use rapier3d::parry::shape::Shape;
@@ -159,13 +159,14 @@ pub(super) struct PairEntry<'s> {
 
 /// The widest node a leaf pair's family is worth evaluating on, a fraction
 /// of the step: where its sides turn by [`BLIND_TURN`] against each other,
-/// or no limit when one is flat across its turn. Each side comes with its
-/// shape, motion and whether the family reads its rotation (a ball's is
-/// not read: its turn does not count).
+/// or no limit when one is flat across its turn. A side whose rotation the
+/// family does not read (a ball's) does not count.
 pub(super) fn blind_width(
-    (shape_a, motion_a, reads_a): (&dyn Shape, &Motion, bool),
-    (shape_b, motion_b, reads_b): (&dyn Shape, &Motion, bool),
+    built: &Built,
+    (shape_a, motion_a): (&dyn Shape, &Motion),
+    (shape_b, motion_b): (&dyn Shape, &Motion),
 ) -> f64 {
+    let [reads_a, reads_b] = built.reads_rotation();
     let turn = |motion: &Motion, reads: bool| {
         if reads { motion.rotation().norm() } else { 0.0 }
     };
@@ -318,11 +319,8 @@ impl<'s, E: Enclosure> PairSet<'s, E> {
                 });
                 match built {
                     Ok(built) => {
-                        let [ra, rb] = built.reads_rotation();
-                        blind = blind_width(
-                            (sa, self.frames.motion(a.frame), ra),
-                            (sb, self.frames.motion(b.frame), rb),
-                        );
+                        let (ma, mb) = (self.frames.motion(a.frame), self.frames.motion(b.frame));
+                        blind = blind_width(&built, (sa, ma), (sb, mb));
                         PairContent::Leaf(built.gap, built.swapped)
                     }
                     Err(e) => {
