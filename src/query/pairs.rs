@@ -2,7 +2,7 @@
 
 use super::balls::Balls;
 use super::frames::{FrameDef, Frames};
-use crate::convert::{glam_from_vec, vec_from_glam};
+use crate::convert::glam_from_vec;
 use crate::enclosure::Interval;
 use crate::enclosure::{Enclosure, InArithmetic, TimeSpan};
 use crate::error::CcdError;
@@ -186,25 +186,22 @@ pub(super) fn blind_width(
 }
 
 /// Whether `shape`, carried by `motion`, is flat across the axis it turns
-/// about: its extent along that axis, which no turn about it changes, is
-/// under [`FLAT_SHARE`] of its local box's diagonal. Only a hint for which
-/// nodes to evaluate (any answer is sound): from the support points where
-/// the shape has them, else its local box.
+/// about: its extent along that axis (between its support points), which
+/// no turn about it changes, is under [`FLAT_SHARE`] of its local box's
+/// diagonal. Only a hint for which nodes to evaluate (any answer is sound);
+/// a leaf with no support map is a half-space, never flat.
 fn flat_across_turn(shape: &dyn Shape, motion: &Motion) -> bool {
-    let Some(axis) = motion.rotation().try_normalize(f64::MIN_POSITIVE) else {
+    let (Some(axis), Some(support)) = (
+        motion.rotation().try_normalize(f64::MIN_POSITIVE),
+        shape.as_support_map(),
+    ) else {
         return false;
     };
     // The axis in the shape's own frame.
-    let k = motion.start_rotation_matrix().transpose() * axis;
-    let half = vec_from_glam(shape.compute_local_aabb().half_extents());
-    let along = match shape.as_support_map() {
-        Some(s) => {
-            let d = glam_from_vec(&k);
-            f64::from((s.local_support_point(d) - s.local_support_point(-d)).dot(d))
-        }
-        None => 2.0 * k.abs().dot(&half),
-    };
-    along < FLAT_SHARE * 2.0 * half.norm()
+    let k = glam_from_vec(&(motion.start_rotation_matrix().transpose() * axis));
+    let along = (support.local_support_point(k) - support.local_support_point(-k)).dot(k);
+    let half = shape.compute_local_aabb().half_extents();
+    f64::from(along) < FLAT_SHARE * 2.0 * f64::from(half.length())
 }
 
 /// The most a pair's sides turn against each other over a node worth
