@@ -277,8 +277,28 @@ impl SupportMap {
         if let Some(n) = core_direction(&self.a.core, &self.b.core, &rel) {
             return (n, None);
         }
+        if let Some(n) = self.face_direction(&rel) {
+            return (n, None);
+        }
         let (n, distance) = self.parry_direction(rel, width);
         (self.snap_to_face(n, &rel), distance)
+    }
+
+    /// The closest points' direction (in `a`'s frame, from `a` towards
+    /// `b`) where a box side's face holds them: see [`face_box`].
+    fn face_direction(&self, rel: &Isometry3<f64>) -> Option<Vector3<f64>> {
+        if let Core::Cuboid(half) = &self.a.core
+            && self.a.border == 0.0
+            && let Some(n) = face_box(half, &self.b, rel)
+        {
+            return Some(n);
+        }
+        if let Core::Cuboid(half) = &self.b.core
+            && self.b.border == 0.0
+        {
+            return face_box(half, &self.a, &rel.inverse()).map(|n| -(rel.rotation * n));
+        }
+        None
     }
 
     /// [`Self::direction`] where it has no closed form: GJK in `f64` on
@@ -907,6 +927,34 @@ fn core_direction(a: &Core, b: &Core, rel: &Isometry3<f64>) -> Option<Vector3<f6
         _ => return None,
     };
     from_a_to_b.try_normalize(1.0e-9)
+}
+
+/// The closest-points direction of a box of half-extents `half` and a
+/// convex shape `other` at `pose` (its frame in the box's), in the box's
+/// frame from the box towards `other`, where a face of the box holds the
+/// closest points: of the three faces turned towards `other`, the one
+/// along whose normal they are farthest apart, when the point of `other`
+/// deepest along that normal lies over the face. That point and its foot
+/// on the face are then apart by exactly the gap along the normal, which
+/// no two points of the shapes undercut, so the normal is the closest
+/// points' direction. `None` where an edge or a corner of the box is
+/// nearest, or no face normal separates them.
+fn face_box(half: &Vector3<f64>, other: &Convex, pose: &Isometry3<f64>) -> Option<Vector3<f64>> {
+    let c = pose.translation.vector;
+    let mut best: Option<(f64, usize, Vector3<f64>)> = None;
+    for i in 0..3 {
+        let mut n = Vector3::zeros();
+        n[i] = 1.0f64.copysign(c[i]);
+        let gap = n.dot(&c) - other.support_f64(&-(pose.rotation.inverse() * n)) - half[i];
+        if gap > 0.0 && best.is_none_or(|(g, _, _)| gap > g) {
+            best = Some((gap, i, n));
+        }
+    }
+    let (_, i, n) = best?;
+    let deepest =
+        pose * nalgebra::Point3::from(other.support_point(&-(pose.rotation.inverse() * n)));
+    let over = (0..3).all(|j| j == i || deepest[j].abs() <= half[j]);
+    over.then_some(n)
 }
 
 /// The closest-points direction of a cylinder of `half_height` at `pose`
