@@ -209,6 +209,21 @@ impl PairGap {
         }
     }
 
+    /// A positive lower bound of the gap over `span` from the exact poses
+    /// at its middle, where the family has one that proves the pair apart
+    /// (see `SupportMap::apart_from_middle`).
+    pub fn apart_from_middle(
+        &self,
+        span: TimeSpan,
+        a: &crate::motion::Motion,
+        b: &crate::motion::Motion,
+    ) -> Option<f64> {
+        match self {
+            PairGap::SupportMap(g) => g.apart_from_middle(span, a, b),
+            _ => None,
+        }
+    }
+
     /// Enclose the axes set in `axes` over `span` into `out`. A family may
     /// stop early once an axis proves the pair apart ([`apart_by`]). The
     /// families that read one side's pose in the other's frame take it

@@ -48,7 +48,7 @@
 use super::Side;
 use super::support::{Convex, Core, ORTHO_SLACK, dot, norm_up, tr_mul};
 use crate::convert::{glam_from_vec, pose_from_iso, pose64_from_iso, vec_from_glam};
-use crate::enclosure::rounding::up;
+use crate::enclosure::rounding::{down, up};
 use crate::enclosure::{Enclosure, Interval, TimeSpan};
 use crate::motion::Trajectory;
 use nalgebra::{Isometry3, Vector3};
@@ -128,6 +128,10 @@ pub(crate) struct SupportMap {
     /// The same direction in the world, as it was at that node's middle:
     /// the next node's first try (see `SupportMap::eval`).
     last_world: Cell<Option<Vector3<f64>>>,
+    /// `last` was found for the node `eval` is asked next, by
+    /// [`SupportMap::apart_from_middle`]: `eval` takes it instead of
+    /// asking again.
+    directed: Cell<bool>,
     /// The GJK simplices of the last closest-points queries: the next
     /// ones' start. Kept only when `curved`; boxed so that the other pairs
     /// stay small to move, the box made once and then written over.
@@ -209,6 +213,7 @@ impl SupportMap {
             skin: up(skin + pad),
             last: Cell::new(None),
             last_world: Cell::new(None),
+            directed: Cell::new(false),
             warm: RefCell::new(None),
             curved,
             closed_form,
@@ -590,7 +595,7 @@ impl SupportMap {
                 self.last.set(Some(m));
                 self.last_world.set(Some(ia.rotation * m));
                 let gap = self.gap_along(&m, &rel);
-                let lo = crate::enclosure::rounding::down(gap - slack - self.skin);
+                let lo = down(gap - slack - self.skin);
                 (
                     Interval::new(lo.clamp(least, most), most),
                     Interval::new(least, most),
@@ -737,6 +742,49 @@ impl SupportMap {
             .flatten()
     }
 
+    /// A positive lower bound of the gap beyond the skin over `span`, from
+    /// the exact poses at its middle and no enclosed pose: the gap there
+    /// along a unit direction `n` (the last node's as it was in the world,
+    /// else the closest points' at the middle), less how fast the shapes
+    /// can close along `n` (their centres' relative speed along it and
+    /// their turning speeds across it, [`SpeedAlong`]) times the
+    /// half-width. `None` where that is not positive; the closest points'
+    /// direction found at the middle is then kept for `eval` on the node.
+    /// The poses at the middle and the supports are rounded a few times in
+    /// terms no larger than the shapes' sizes and positions, which
+    /// `ORTHO_SLACK` of them covers (as in [`Self::eval_at_a_time`]).
+    ///
+    /// [`SpeedAlong`]: crate::motion::SpeedAlong
+    pub fn apart_from_middle(
+        &self,
+        span: TimeSpan,
+        ma: &crate::motion::Motion,
+        mb: &crate::motion::Motion,
+    ) -> Option<f64> {
+        let (mid, h) = span.center_radius();
+        let (ia, ib) = (ma.pose_at(mid), mb.pose_at(mid));
+        let rel = ia.inv_mul(&ib);
+        let speeds = ma.relative_speed_along(self.a.extent(), mb, self.b.extent());
+        let extents = self.a.extent() + self.b.extent();
+        let sizes = up(ia.translation.vector.norm() + ib.translation.vector.norm() + extents);
+        let slack = up(ORTHO_SLACK * sizes);
+        let apart = |n: &Vector3<f64>| {
+            let gap = self.gap_along(&(ia.rotation.inverse() * n), &rel);
+            let lo = down(down(gap - slack - self.skin) - up(speeds.at(n) * h));
+            (lo > 0.0).then_some(lo)
+        };
+        if let Some(lo) = self.last_world.get().and_then(|n| apart(&n)) {
+            return Some(lo);
+        }
+        let (m, _) = self.direction(&ia, &ib, span.hi - span.lo);
+        let n = ia.rotation * m;
+        self.last.set(Some(m));
+        self.last_world.set(Some(n));
+        let found = apart(&n);
+        self.directed.set(found.is_none());
+        found
+    }
+
     #[inline(never)]
     pub fn eval<E: Enclosure>(
         &self,
@@ -771,7 +819,10 @@ impl SupportMap {
         // than the extra axis. A cylinder against a box skips it past its
         // ends too: its nodes mostly straddle the contact, where the try
         // failed 94 % of the time, each failure costing an axis.)
+        // Found for this very node by `apart_from_middle`.
+        let directed = self.directed.replace(false);
         if axes & 1 != 0
+            && !directed
             && !self.closed_form
             && let Some(last) = self.last_world.get()
         {
@@ -781,7 +832,10 @@ impl SupportMap {
             }
         }
         let width = span.hi - span.lo;
-        let (m, distance) = self.direction(&ia, &ib, width);
+        let (m, distance) = match self.last.get().filter(|_| directed) {
+            Some(m) => (m, None),
+            None => self.direction(&ia, &ib, width),
+        };
         self.last.set(Some(m));
         let n = ia.rotation * m;
         self.last_world.set(Some(n));

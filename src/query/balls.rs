@@ -128,6 +128,11 @@ impl Balls {
         apart.is_finite().then_some(Balls { apart, turn, still })
     }
 
+    /// How much the sides turn over the step together, radians.
+    pub fn turn(&self) -> f64 {
+        self.turn
+    }
+
     /// A positive lower bound of the pair's gap beyond the skin over
     /// `span`, when the balls show one (only asked on nodes that turn more
     /// than [`BALLS_TURN`]). `a` and `b` move the frames in the order the
