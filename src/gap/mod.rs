@@ -82,18 +82,24 @@ pub(crate) struct Side<'p, E: Enclosure> {
 impl<E: Enclosure> Side<'_, E> {
     /// The frame's exact pose at `t`: the kept one when it is for `t`.
     pub fn pose_at(&self, t: f64) -> Isometry3<f64> {
-        let Some(kept) = self.kept else {
-            return self.motion.pose_at(t);
-        };
-        if let Some((at, pose)) = kept.get()
-            && at == t
-        {
-            return pose;
+        match self.kept {
+            Some(kept) => kept_pose_at(self.motion, kept, t),
+            None => self.motion.pose_at(t),
         }
-        let pose = self.motion.pose_at(t);
-        kept.set(Some((t, pose)));
-        pose
     }
+}
+
+/// `motion`'s exact pose at `t`: the one `kept` holds when it is for `t`,
+/// else computed and kept.
+pub(crate) fn kept_pose_at(motion: &Motion, kept: &KeptPose, t: f64) -> Isometry3<f64> {
+    if let Some((at, pose)) = kept.get()
+        && at == t
+    {
+        return pose;
+    }
+    let pose = motion.pose_at(t);
+    kept.set(Some((t, pose)));
+    pose
 }
 
 /// Each side of a pair seen from the other over a node, where the search
@@ -215,8 +221,8 @@ impl PairGap {
     pub fn apart_from_middle(
         &self,
         span: TimeSpan,
-        a: &crate::motion::Motion,
-        b: &crate::motion::Motion,
+        a: (&Motion, &KeptPose),
+        b: (&Motion, &KeptPose),
     ) -> Option<f64> {
         match self {
             PairGap::SupportMap(g) => g.apart_from_middle(span, a, b),

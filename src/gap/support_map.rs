@@ -45,12 +45,12 @@
 //! last node's direction (as it was in the world) is tried first, and a
 //! node it proves apart needs no query.
 
-use super::Side;
 use super::support::{Convex, Core, ORTHO_SLACK, dot, norm_up, tr_mul};
+use super::{KeptPose, Side, kept_pose_at};
 use crate::convert::{glam_from_vec, pose_from_iso, pose64_from_iso, vec_from_glam};
 use crate::enclosure::rounding::{down, up};
 use crate::enclosure::{Enclosure, Interval, TimeSpan};
-use crate::motion::Trajectory;
+use crate::motion::{Motion, Trajectory};
 use nalgebra::{Isometry3, Vector3};
 use parry3d_f64::math::{Pose as Pose64, Vector as Vec64};
 use parry3d_f64::query::gjk::{
@@ -758,11 +758,11 @@ impl SupportMap {
     pub fn apart_from_middle(
         &self,
         span: TimeSpan,
-        ma: &crate::motion::Motion,
-        mb: &crate::motion::Motion,
+        (ma, kept_a): (&Motion, &KeptPose),
+        (mb, kept_b): (&Motion, &KeptPose),
     ) -> Option<f64> {
         let (mid, h) = span.center_radius();
-        let (ia, ib) = (ma.pose_at(mid), mb.pose_at(mid));
+        let (ia, ib) = (kept_pose_at(ma, kept_a, mid), kept_pose_at(mb, kept_b, mid));
         let rel = ia.inv_mul(&ib);
         let speeds = ma.relative_speed_along(self.a.extent(), mb, self.b.extent());
         let extents = self.a.extent() + self.b.extent();

@@ -483,12 +483,16 @@ impl<E: Enclosure> GapSet<E> for PairSet<'_, E> {
                 }
                 let (fa, fb) = if *swapped { (fb, fa) } else { (fa, fb) };
                 // A fast spin's piece: first from the exact poses at its
-                // middle (see `FAST_TURN`).
-                if let Some(balls) = &entry.balls
-                    && balls.turn() > FAST_TURN
-                    && balls.turn() * (span.hi - span.lo) >= MIDDLE_TURN
-                    && let Some(lo) =
-                        gap.apart_from_middle(span, self.frames.motion(fa), self.frames.motion(fb))
+                // middle (see `FAST_TURN`), kept for the family.
+                let piece_of_spin = entry.balls.is_some_and(|balls| {
+                    balls.turn() > FAST_TURN && balls.turn() * (span.hi - span.lo) >= MIDDLE_TURN
+                });
+                if piece_of_spin
+                    && let Some(lo) = gap.apart_from_middle(
+                        span,
+                        (self.frames.motion(fa), self.frames.kept(fa)),
+                        (self.frames.motion(fb), self.frames.kept(fb)),
+                    )
                     && first < out.len()
                 {
                     out[first] = E::constant(lo);
@@ -523,8 +527,10 @@ impl<E: Enclosure> GapSet<E> for PairSet<'_, E> {
                     a_in_b: a_in_b.map(|kept| self.frames.kept_relative(kept)),
                 };
                 // So do their exact poses at the node's middle (a lone
-                // pair reads each once: nothing to keep).
-                let kept = |f| entry.piece.map(|_| self.frames.kept(f));
+                // pair reads each once, nothing to keep, unless its middle
+                // was just tested).
+                let keeps = entry.piece.is_some() || piece_of_spin;
+                let kept = |f| keeps.then(|| self.frames.kept(f));
                 let a = Side {
                     pose: &pa,
                     motion: self.frames.motion(fa),
