@@ -764,8 +764,9 @@ impl SupportMap {
         let (mid, h) = span.center_radius();
         let (ia, ib) = (kept_pose_at(ma, kept_a, mid), kept_pose_at(mb, kept_b, mid));
         let rel = ia.inv_mul(&ib);
-        let speeds = ma.relative_speed_along(self.a.extent(), mb, self.b.extent());
-        let extents = self.a.extent() + self.b.extent();
+        let (extent_a, extent_b) = (self.a.extent(), self.b.extent());
+        let speeds = ma.relative_speed_along(extent_a, mb, extent_b);
+        let extents = extent_a + extent_b;
         let sizes = up(ia.translation.vector.norm() + ib.translation.vector.norm() + extents);
         let slack = up(ORTHO_SLACK * sizes);
         let apart = |n: &Vector3<f64>| {
@@ -818,8 +819,9 @@ impl SupportMap {
         // (Only where that query is parry's: the closed form is cheaper
         // than the extra axis. A cylinder against a box skips it past its
         // ends too: its nodes mostly straddle the contact, where the try
-        // failed 94 % of the time, each failure costing an axis.)
-        // Found for this very node by `apart_from_middle`.
+        // failed 94 % of the time, each failure costing an axis.) Not on
+        // a node whose direction `apart_from_middle` just found: it is
+        // taken as it is.
         let directed = self.directed.replace(false);
         if axes & 1 != 0
             && !directed
@@ -999,14 +1001,15 @@ fn face_box(half: &Vector3<f64>, other: &Convex, pose: &Isometry3<f64>) -> Optio
     for i in 0..3 {
         let mut n = Vector3::zeros();
         n[i] = 1.0f64.copysign(c[i]);
-        let gap = n.dot(&c) - other.support_f64(&-(pose.rotation.inverse() * n)) - half[i];
+        let gap =
+            n.dot(&c) - other.support_f64(&-pose.rotation.inverse_transform_vector(&n)) - half[i];
         if gap > 0.0 && best.is_none_or(|(g, _, _)| gap > g) {
             best = Some((gap, i, n));
         }
     }
     let (_, i, n) = best?;
-    let deepest =
-        pose * nalgebra::Point3::from(other.support_point(&-(pose.rotation.inverse() * n)));
+    let deepest = pose
+        * nalgebra::Point3::from(other.support_point(&-pose.rotation.inverse_transform_vector(&n)));
     let over = (0..3).all(|j| j == i || deepest[j].abs() <= half[j]);
     over.then_some(n)
 }
