@@ -198,6 +198,13 @@ impl PairGap {
         }
     }
 
+    /// [`PairGap::reads_rotation`] in the caller's order: `swapped` when
+    /// the family's `a` side is the caller's second shape.
+    pub fn reads_rotation_as(&self, swapped: bool) -> [bool; 2] {
+        let [a, b] = self.reads_rotation();
+        if swapped { [b, a] } else { [a, b] }
+    }
+
     /// The axes at the single time `t` without enclosing the poses, where
     /// the family can (see `SupportMap::eval_at_a_time`); `false` when it
     /// cannot, with `out` untouched.
@@ -274,8 +281,7 @@ impl Built {
     /// Whether the family reads each side's rotation, in the caller's
     /// order (see [`PairGap::reads_rotation`]).
     pub fn reads_rotation(&self) -> [bool; 2] {
-        let [a, b] = self.gap.reads_rotation();
-        if self.swapped { [b, a] } else { [a, b] }
+        self.gap.reads_rotation_as(self.swapped)
     }
 }
 

@@ -560,12 +560,8 @@ impl SupportMap {
         }
         let (ia, ib) = (ma.pose_at(t), mb.pose_at(t));
         let rel = ia.inv_mul(&ib);
-        // The poses, the relative pose and the supports are each rounded a
-        // few times in terms no larger than these sizes: 1e-12 of them
-        // covers that many times over (as `ORTHO_SLACK` pads the skin).
         let extents = self.a.extent() + self.b.extent();
-        let sizes = up(ia.translation.vector.norm() + ib.translation.vector.norm() + extents);
-        let slack = up(ORTHO_SLACK * sizes);
+        let (sizes, slack) = rounding_slack(&ia, &ib, extents);
         // No two points of the shapes are farther apart than this.
         let farthest = up(rel.translation.vector.norm() + extents);
         let least = -up(farthest + self.skin + slack);
@@ -752,7 +748,7 @@ impl SupportMap {
     /// direction found at the middle is then kept for `eval` on the node.
     /// The poses at the middle and the supports are rounded a few times in
     /// terms no larger than the shapes' sizes and positions, which
-    /// `ORTHO_SLACK` of them covers (as in [`Self::eval_at_a_time`]).
+    /// [`rounding_slack`] covers (as in [`Self::eval_at_a_time`]).
     ///
     /// [`SpeedAlong`]: crate::motion::SpeedAlong
     pub fn apart_from_middle(
@@ -766,9 +762,7 @@ impl SupportMap {
         let rel = ia.inv_mul(&ib);
         let (extent_a, extent_b) = (self.a.extent(), self.b.extent());
         let speeds = ma.relative_speed_along(extent_a, mb, extent_b);
-        let extents = extent_a + extent_b;
-        let sizes = up(ia.translation.vector.norm() + ib.translation.vector.norm() + extents);
-        let slack = up(ORTHO_SLACK * sizes);
+        let (_, slack) = rounding_slack(&ia, &ib, extent_a + extent_b);
         let apart = |n: &Vector3<f64>| {
             let gap = self.gap_along(&(ia.rotation.inverse() * n), &rel);
             let lo = down(down(gap - slack - self.skin) - up(speeds.at(n) * h));
@@ -927,6 +921,16 @@ impl SupportMap {
             out[slot] = in_b(&if f.dot(&k) >= 0.0 { f } else { -f });
         }
     }
+}
+
+/// The sizes of two shapes `extents` across (their extents summed) at the
+/// exact poses `ia`, `ib`, and the pad that covers a gap computed there in
+/// plain `f64`: the poses, the relative pose and the supports are each
+/// rounded a few times in terms no larger than those sizes, and 1e-12 of
+/// them covers that many times over (as `ORTHO_SLACK` pads the skin).
+fn rounding_slack(ia: &Isometry3<f64>, ib: &Isometry3<f64>, extents: f64) -> (f64, f64) {
+    let sizes = up(ia.translation.vector.norm() + ib.translation.vector.norm() + extents);
+    (sizes, up(ORTHO_SLACK * sizes))
 }
 
 /// `simplex`, found at the relative pose `old12`, carried to `pos12`: its

@@ -66,12 +66,7 @@ impl Balls {
         let PairContent::Leaf(gap, swapped) = kind else {
             return None;
         };
-        let [reads_a, reads_b] = gap.reads_rotation();
-        let (reads_a, reads_b) = if *swapped {
-            (reads_b, reads_a)
-        } else {
-            (reads_a, reads_b)
-        };
+        let [reads_a, reads_b] = gap.reads_rotation_as(*swapped);
         let square = |reads: bool, m: &Motion| {
             if reads {
                 m.rotation().norm_squared()

@@ -43,11 +43,7 @@ impl InArithmetic for Search<'_, '_> {
         let mut rotation_read = vec![false; frames.len()];
         for pair in &pairs {
             let [a, b] = match &pair.kind {
-                PairContent::Leaf(gap, false) => gap.reads_rotation(),
-                PairContent::Leaf(gap, true) => {
-                    let [a, b] = gap.reads_rotation();
-                    [b, a]
-                }
+                PairContent::Leaf(gap, swapped) => gap.reads_rotation_as(*swapped),
                 _ => [true, true],
             };
             rotation_read[pair.a as usize] |= a;
