@@ -33,6 +33,7 @@ mod ball_triangle;
 pub(crate) mod composite;
 mod cuboid_cuboid;
 mod cuboid_triangle;
+mod generators;
 mod halfspace;
 pub(crate) mod primitives;
 mod support;

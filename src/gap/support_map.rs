@@ -12,6 +12,8 @@
 //! exact poses of the node's middle time (in closed form when both cores
 //! are points, segments or boxes, a capsule pair needing no GJK, and for a
 //! cylinder and a box whose closest points lie beside the cylinder's axis;
+//! for a cylinder or cone and a box, by Newton's method over the round
+//! shape's generators (`super::generators`);
 //! parry's contact query otherwise, and on a node narrower than 1e-3 of
 //! the step a pair with a curved shape first asks GJK in `f64` over our
 //! own support points, whose normal is precise where parry's `f32` one is
@@ -45,6 +47,7 @@
 //! last node's direction (as it was in the world) is tried first, and a
 //! node it proves apart needs no query.
 
+use super::generators::{RoundBox, round_box};
 use super::support::{Convex, Core, ORTHO_SLACK, dot, norm_up, tr_mul};
 use super::{KeptPose, Side, kept_pose_at};
 use crate::convert::{glam_from_vec, pose_from_iso, pose64_from_iso, vec_from_glam};
@@ -144,6 +147,9 @@ pub(crate) struct SupportMap {
     curved: bool,
     /// The cores' closest points have a closed form (`core_direction`).
     closed_form: bool,
+    /// A cylinder or cone against a box ([`round_box`]): `Some(true)`
+    /// when `a` is the cylinder or cone.
+    round_box: Option<bool>,
     /// Some shape has its own axes for [`SupportMap::shallowest_axis`].
     own_axes: bool,
     /// A triangle's normal is one of them: against a hull (which has no
@@ -201,7 +207,19 @@ impl SupportMap {
         };
         let curved = curved(&a) || curved(&b);
         let witnesses = a.tests_points() || b.tests_points();
+        let round = |c: &Convex| {
+            c.border == 0.0 && matches!(c.core, Core::Cylinder { .. } | Core::Cone { .. })
+        };
+        let cuboid = |c: &Convex| c.border == 0.0 && matches!(c.core, Core::Cuboid(_));
+        let round_box = if round(&a) && cuboid(&b) {
+            Some(true)
+        } else if cuboid(&a) && round(&b) {
+            Some(false)
+        } else {
+            None
+        };
         SupportMap {
+            round_box,
             face_a,
             face_b,
             own_axes,
@@ -306,6 +324,30 @@ impl SupportMap {
         None
     }
 
+    /// What [`round_box`] finds of a cylinder or cone and a box (`None`
+    /// for other pairs), its direction in `a`'s frame from `a` towards
+    /// `b`, started from the last node's direction.
+    fn round_box_direction(&self, rel: &Isometry3<f64>) -> Option<RoundBox> {
+        let last = self.last.get();
+        let found = match self.round_box? {
+            true => {
+                let start = last.map(|n| rel.rotation.inverse() * n);
+                match round_box(&self.a, &rel.inverse(), &self.b, start.as_ref()) {
+                    RoundBox::Apart(n) => RoundBox::Apart(rel.rotation * n),
+                    other => other,
+                }
+            }
+            false => {
+                let start = last.map(|n| -n);
+                match round_box(&self.b, rel, &self.a, start.as_ref()) {
+                    RoundBox::Apart(n) => RoundBox::Apart(-n),
+                    other => other,
+                }
+            }
+        };
+        Some(found)
+    }
+
     /// [`Self::direction`] where it has no closed form: GJK in `f64` on
     /// narrow nodes of a curved pair, else parry's `f32` GJK (or EPA, or
     /// the shapes' own least-overlap axis, or parry's contact).
@@ -337,6 +379,24 @@ impl SupportMap {
             && gap > 0.0
         {
             return (n, None);
+        }
+        // A cylinder or cone and a box: their closest points through the
+        // round shape's generators, where parry's GJK creeps along a rim
+        // or a cone's side. Found overlapping, they take what GJK's
+        // `Intersection` leads to below, without it: the last direction,
+        // or on a wide node their shallowest own axis.
+        match self.round_box_direction(&rel) {
+            Some(RoundBox::Apart(n)) => return (n, None),
+            Some(RoundBox::Overlap) => {
+                if depth && coarse {
+                    if let Some((_, n)) = self.shallowest_axis(&rel) {
+                        return (n, None);
+                    }
+                } else if let Some(last) = self.last.get() {
+                    return (last, None);
+                }
+            }
+            _ => {}
         }
         if width > 0.0
             && width < NARROW_NODE
