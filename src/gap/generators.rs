@@ -36,8 +36,13 @@ const AGREEMENT: f64 = 1.0e-6;
 /// What [`round_box`] found.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) enum RoundBox {
-    /// The closest points' unit direction.
-    Apart(Vector3<f64>),
+    /// The closest points: their unit direction, the round shape's and
+    /// the box's.
+    Apart {
+        normal: Vector3<f64>,
+        on_round: Vector3<f64>,
+        on_box: Vector3<f64>,
+    },
     /// A generator meets the box (or comes within rounding of it): the
     /// shapes overlap.
     Overlap,
@@ -141,6 +146,7 @@ pub(crate) fn round_box(
     let scale = radius + half_height + half.norm() + centre.norm();
     let (mut p, mut q, mut slope, mut curvature) = at(angle);
     let mut converged = false;
+    let mut last_step = 0.0f64;
     for _ in 0..MOST_STEPS {
         if (p - q).norm_squared() <= (1.0e-9 * scale).powi(2) {
             return RoundBox::Overlap;
@@ -154,11 +160,29 @@ pub(crate) fn round_box(
         // most about a quarter turn. A step too short to matter is not
         // taken: the points are then the closest ones to well within
         // rounding of the direction (Newton's steps shrink quadratically).
-        let step = if curvature > 0.0 {
-            (-slope / curvature).clamp(-0.8, 0.8)
+        let mut step = if curvature > 0.0 {
+            -slope / curvature
         } else {
             -0.2f64.copysign(slope)
         };
+        // Steps that shrink only linearly: the distance nears zero at a
+        // smooth minimum (a rim lying against a face), where its square
+        // is flat to fourth order. Newton's step on the distance itself,
+        // `-d'/d''` with `d' = f'/d` and `d'' = (f'' − d'²)/d`, is exact
+        // there.
+        let d2 = (p - q).norm_squared();
+        if curvature > 0.0
+            && step * last_step > 0.0
+            && step.abs() > 0.3 * last_step.abs()
+            && d2 < (0.01 * radius).powi(2)
+        {
+            let den = curvature * d2 - slope * slope;
+            if den > 0.0 {
+                step = -slope * d2 / den;
+            }
+        }
+        let step = step.clamp(-0.8, 0.8);
+        last_step = step;
         if (step * radius).abs() <= 1.0e-9 * scale {
             converged = true;
             break;
@@ -183,7 +207,11 @@ pub(crate) fn round_box(
         - n.dot(&centre)
         - round.support_f64(&pose.rotation.inverse_transform_vector(&n));
     if gap >= distance * (1.0 - AGREEMENT) - 1.0e-12 * scale {
-        RoundBox::Apart(n)
+        RoundBox::Apart {
+            normal: n,
+            on_round: p,
+            on_box: q,
+        }
     } else {
         RoundBox::Unknown
     }
@@ -242,8 +270,14 @@ mod tests {
             .unwrap()
             .distance;
             match found {
-                RoundBox::Apart(n) => {
+                RoundBox::Apart { normal: n, on_round, on_box } => {
                     prop_assert!((n.norm() - 1.0).abs() < 1.0e-12);
+                    // The points are the shapes' (the box's within it, the
+                    // round one's on a generator), `distance` apart.
+                    prop_assert!((0..3).all(|i| on_box[i].abs() <= half[i]));
+                    let local = pose.inverse_transform_vector(&(on_round - pose.translation.vector));
+                    prop_assert!(local.y.abs() <= half_height * (1.0 + 1.0e-12));
+                    prop_assert!(((on_box - on_round).norm() - distance).abs() <= 1.0e-4 * distance + 1.0e-9);
                     let box_reach = half[0] * n.x.abs() + half[1] * n.y.abs() + half[2] * n.z.abs();
                     let gap = -box_reach - n.dot(&pose.translation.vector)
                         - round.support_f64(&pose.rotation.inverse_transform_vector(&n));
@@ -293,7 +327,7 @@ mod tests {
                 [next() * 3.2, next() * 3.2, next() * 3.2],
             );
             match round_box(&round, &pose, &cuboid, None) {
-                RoundBox::Apart(_) => {
+                RoundBox::Apart { .. } => {
                     apart += 1;
                     answered += 1;
                 }

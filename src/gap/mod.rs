@@ -46,6 +46,7 @@ pub(crate) use ball_segment::BallSegment;
 pub(crate) use ball_triangle::BallTriangle;
 pub(crate) use cuboid_cuboid::CuboidCuboid;
 pub(crate) use cuboid_triangle::CuboidTriangle;
+pub(crate) use generators::{RoundBox, round_box};
 pub(crate) use halfspace::HalfSpaceConvex;
 pub(crate) use support::{Convex, Core};
 pub(crate) use support_map::{SupportMap, beside_axis, segment_box, segment_segment};

@@ -47,9 +47,9 @@
 //! last node's direction (as it was in the world) is tried first, and a
 //! node it proves apart needs no query.
 
-use super::generators::{RoundBox, round_box};
 use super::support::{Convex, Core, ORTHO_SLACK, dot, norm_up, tr_mul};
 use super::{KeptPose, Side, kept_pose_at};
+use super::{RoundBox, round_box};
 use crate::convert::{glam_from_vec, pose_from_iso, pose64_from_iso, vec_from_glam};
 use crate::enclosure::rounding::{down, up};
 use crate::enclosure::{Enclosure, Interval, TimeSpan};
@@ -325,7 +325,7 @@ impl SupportMap {
     }
 
     /// What [`round_box`] finds of a cylinder or cone and a box (`None`
-    /// for other pairs), its direction in `a`'s frame from `a` towards
+    /// for other pairs), in `a`'s frame, its direction from `a` towards
     /// `b`, started from the last node's direction.
     fn round_box_direction(&self, rel: &Isometry3<f64>) -> Option<RoundBox> {
         let last = self.last.get();
@@ -333,14 +333,30 @@ impl SupportMap {
             true => {
                 let start = last.map(|n| rel.rotation.inverse() * n);
                 match round_box(&self.a, &rel.inverse(), &self.b, start.as_ref()) {
-                    RoundBox::Apart(n) => RoundBox::Apart(rel.rotation * n),
+                    RoundBox::Apart {
+                        normal,
+                        on_round,
+                        on_box,
+                    } => RoundBox::Apart {
+                        normal: rel.rotation * normal,
+                        on_round: rel.transform_point(&on_round.into()).coords,
+                        on_box: rel.transform_point(&on_box.into()).coords,
+                    },
                     other => other,
                 }
             }
             false => {
                 let start = last.map(|n| -n);
                 match round_box(&self.b, rel, &self.a, start.as_ref()) {
-                    RoundBox::Apart(n) => RoundBox::Apart(-n),
+                    RoundBox::Apart {
+                        normal,
+                        on_round,
+                        on_box,
+                    } => RoundBox::Apart {
+                        normal: -normal,
+                        on_round,
+                        on_box,
+                    },
                     other => other,
                 }
             }
@@ -386,7 +402,7 @@ impl SupportMap {
         // `Intersection` leads to below, without it: the last direction,
         // or on a wide node their shallowest own axis.
         match self.round_box_direction(&rel) {
-            Some(RoundBox::Apart(n)) => return (n, None),
+            Some(RoundBox::Apart { normal, .. }) => return (normal, None),
             Some(RoundBox::Overlap) => {
                 if depth && coarse {
                     if let Some((_, n)) = self.shallowest_axis(&rel) {
