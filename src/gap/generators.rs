@@ -43,8 +43,9 @@ pub(crate) enum RoundBox {
         on_round: Vector3<f64>,
         on_box: Vector3<f64>,
     },
-    /// A generator meets the box (or comes within rounding of it): the
-    /// shapes overlap.
+    /// A generator meets the box, or comes within 1e-9 of the shapes'
+    /// sizes of it (closer than `f32` resolves): the shapes overlap, or
+    /// as good as touch.
     Overlap,
     /// The search did not find the closest points (or the shapes are not
     /// a cylinder or cone and a box, both without a border).
