@@ -300,7 +300,12 @@ impl SupportMap {
         if let Some(n) = core_direction(&self.a.core, &self.b.core, &rel) {
             return (n, None);
         }
-        if let Some(n) = self.face_direction(&rel) {
+        // (A cylinder or cone against a box finds a face's normal through
+        // its generators, in `parry_direction`, where it is the closest
+        // points' direction.)
+        if self.round_box.is_none()
+            && let Some(n) = self.face_direction(&rel)
+        {
             return (n, None);
         }
         let (n, distance) = self.parry_direction(rel, width);
