@@ -24,8 +24,10 @@ use super::support::{Convex, Core};
 use super::support_map::segment_box;
 use nalgebra::{Isometry3, Vector3};
 
-/// The most Newton steps.
-const MOST_STEPS: usize = 6;
+/// The most Newton steps. Measured on the queries bench's cylinder and cone
+/// cases: 6 and 8 steps cost 2–5 % more instructions (more searches given
+/// up, each then asking GJK), 20 about 1 % more.
+const MOST_STEPS: usize = 12;
 
 /// The found points' distance may exceed the gap along their direction by
 /// this share of itself (and rounding): the direction is then as good as
@@ -147,7 +149,7 @@ pub(crate) fn round_box(
     let scale = radius + half_height + half.norm() + centre.norm();
     let (mut p, mut q, mut slope, mut curvature) = at(angle);
     let mut converged = false;
-    let mut last_step = 0.0f64;
+    let (mut last_step, mut last_slope) = (0.0f64, 0.0f64);
     for _ in 0..MOST_STEPS {
         if (p - q).norm_squared() <= (1.0e-9 * scale).powi(2) {
             return RoundBox::Overlap;
@@ -163,9 +165,19 @@ pub(crate) fn round_box(
         // rounding of the direction (Newton's steps shrink quadratically).
         let mut step = if curvature > 0.0 {
             -slope / curvature
+        } else if last_step * slope < 0.0 {
+            // Still downhill where `f` curves down: twice the last step.
+            2.0 * last_step
         } else {
             -0.2f64.copysign(slope)
         };
+        // The slope changed sign since the last point: the minimum lies
+        // between the two, and a step that leaves that span (Newton's
+        // overshooting at a kink, and then swinging back and forth) is
+        // the secant's instead.
+        if slope * last_slope < 0.0 && !(step * last_step < 0.0 && step.abs() < last_step.abs()) {
+            step = -last_step * slope / (slope - last_slope);
+        }
         // Steps that shrink only linearly: the distance nears zero at a
         // smooth minimum (a rim lying against a face), where its square
         // is flat to fourth order. Newton's step on the distance itself,
@@ -183,7 +195,7 @@ pub(crate) fn round_box(
             }
         }
         let step = step.clamp(-0.8, 0.8);
-        last_step = step;
+        (last_step, last_slope) = (step, slope);
         if (step * radius).abs() <= 1.0e-9 * scale {
             converged = true;
             break;
