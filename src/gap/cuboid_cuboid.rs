@@ -18,10 +18,10 @@
 //! formula contains the formula at the true `R`.
 
 use super::support::ORTHO_SLACK;
-use super::{Relative, Side};
-use crate::enclosure::Enclosure;
-use crate::enclosure::rounding::up;
-use crate::motion::{column, row};
+use super::{KeptPose, Relative, Side, kept_pose_at, rounding_slack};
+use crate::enclosure::rounding::{down, up};
+use crate::enclosure::{Enclosure, TimeSpan};
+use crate::motion::{Motion, column, row};
 use nalgebra::Vector3;
 
 #[derive(Clone, Debug)]
@@ -55,6 +55,66 @@ impl CuboidCuboid {
             face_a: [0, 1, 2].map(|i| up(half_a[i] + skin)),
             face_b: [0, 1, 2].map(|j| up(half_b[j] + skin)),
         }
+    }
+
+    /// A positive lower bound of the gap beyond the skin over `span`, from
+    /// the exact poses at its middle and no enclosed pose (as
+    /// `SupportMap::apart_from_middle`, for a fast spin's pieces): the
+    /// boxes' gap there along the best of their 15 axes, in plain `f64`,
+    /// less how fast the gap along that direction can close
+    /// ([`crate::motion::SpeedAlong`]) times the half-width. `None` where
+    /// that is not positive.
+    pub fn apart_from_middle(
+        &self,
+        span: TimeSpan,
+        (ma, kept_a): (&Motion, &KeptPose),
+        (mb, kept_b): (&Motion, &KeptPose),
+    ) -> Option<f64> {
+        let (mid, h) = span.center_radius();
+        let (ia, ib) = (kept_pose_at(ma, kept_a, mid), kept_pose_at(mb, kept_b, mid));
+        let rel = ia.inv_mul(&ib);
+        // `b`'s axes in `a`'s frame, and its centre.
+        let r = rel.rotation.to_rotation_matrix().into_inner();
+        let t = rel.translation.vector;
+        let (ha, hb) = (self.half_a, self.half_b);
+        let reach = |half: &Vector3<f64>, n: &Vector3<f64>| {
+            half.x * n.x.abs() + half.y * n.y.abs() + half.z * n.z.abs()
+        };
+        // The gap along the unit axis `l / |l|`, from `a` towards `b`.
+        let along = |l: Vector3<f64>| {
+            let n = l.try_normalize(1.0e-6)?;
+            let n = if n.dot(&t) < 0.0 { -n } else { n };
+            let gap = n.dot(&t) - reach(&ha, &n) - reach(&hb, &(r.transpose() * n));
+            Some((gap, n))
+        };
+        let mut best: Option<(f64, Vector3<f64>)> = None;
+        let mut consider = |l: Vector3<f64>| {
+            if let Some((gap, n)) = along(l)
+                && best.is_none_or(|(g, _)| gap > g)
+            {
+                best = Some((gap, n));
+            }
+        };
+        for i in 0..3 {
+            consider(Vector3::ith(i, 1.0));
+            consider(r.column(i).into_owned());
+        }
+        for i in 0..3 {
+            for j in 0..3 {
+                consider(Vector3::<f64>::ith(i, 1.0).cross(&r.column(j)));
+            }
+        }
+        let (gap, n) = best?;
+        let (extent_a, extent_b) = (
+            up(ha.norm() * (1.0 + 1.0e-14)),
+            up(hb.norm() * (1.0 + 1.0e-14)),
+        );
+        let (_, slack) = rounding_slack(&ia, &ib, extent_a + extent_b);
+        let speed = ma
+            .relative_speed_along(extent_a, mb, extent_b)
+            .at(&(ia.rotation * n));
+        let lo = down(down(gap - slack - self.skin) - up(speed * h));
+        (lo > 0.0).then_some(lo)
     }
 
     #[inline(never)]

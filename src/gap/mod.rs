@@ -48,11 +48,13 @@ pub(crate) use cuboid_cuboid::CuboidCuboid;
 pub(crate) use cuboid_triangle::CuboidTriangle;
 pub(crate) use generators::{RoundBox, round_box};
 pub(crate) use halfspace::HalfSpaceConvex;
+use support::ORTHO_SLACK;
 pub(crate) use support::{Convex, Core};
 pub(crate) use support_map::{SupportMap, beside_axis, segment_box, segment_segment};
 pub(crate) use triangle_triangle::TriangleTriangle;
 
 use crate::convert::vec_from_glam;
+use crate::enclosure::rounding::up;
 use crate::enclosure::{Enclosure, TimeSpan};
 use crate::error::{CcdError, check_finite};
 use crate::motion::{Motion, Pose, Trajectory};
@@ -102,6 +104,16 @@ pub(crate) fn kept_pose_at(motion: &Motion, kept: &KeptPose, t: f64) -> Isometry
     let pose = motion.pose_at(t);
     kept.set(Some((t, pose)));
     pose
+}
+
+/// The sizes of two shapes `extents` across (their extents summed) at the
+/// exact poses `ia`, `ib`, and the pad that covers a gap computed there in
+/// plain `f64`: the poses, the relative pose and the supports are each
+/// rounded a few times in terms no larger than those sizes, and 1e-12 of
+/// them covers that many times over (as `ORTHO_SLACK` pads the skin).
+pub(crate) fn rounding_slack(ia: &Isometry3<f64>, ib: &Isometry3<f64>, extents: f64) -> (f64, f64) {
+    let sizes = up(ia.translation.vector.norm() + ib.translation.vector.norm() + extents);
+    (sizes, up(ORTHO_SLACK * sizes))
 }
 
 /// Each side of a pair seen from the other over a node, where the search
@@ -235,6 +247,8 @@ impl PairGap {
     ) -> Option<f64> {
         match self {
             PairGap::SupportMap(g) => g.apart_from_middle(span, a, b),
+            PairGap::CuboidCuboid(g) => g.apart_from_middle(span, a, b),
+            PairGap::CuboidTriangle(g) => g.apart_from_middle(span, a, b),
             _ => None,
         }
     }

@@ -48,7 +48,7 @@
 //! node it proves apart needs no query.
 
 use super::support::{Convex, Core, ORTHO_SLACK, dot, norm_up, tr_mul};
-use super::{KeptPose, Side, kept_pose_at};
+use super::{KeptPose, Side, kept_pose_at, rounding_slack};
 use super::{RoundBox, round_box};
 use crate::convert::{glam_from_vec, pose_from_iso, pose64_from_iso, vec_from_glam};
 use crate::enclosure::rounding::{down, up};
@@ -1019,16 +1019,6 @@ impl SupportMap {
             out[slot] = in_b(&if f.dot(&k) >= 0.0 { f } else { -f });
         }
     }
-}
-
-/// The sizes of two shapes `extents` across (their extents summed) at the
-/// exact poses `ia`, `ib`, and the pad that covers a gap computed there in
-/// plain `f64`: the poses, the relative pose and the supports are each
-/// rounded a few times in terms no larger than those sizes, and 1e-12 of
-/// them covers that many times over (as `ORTHO_SLACK` pads the skin).
-fn rounding_slack(ia: &Isometry3<f64>, ib: &Isometry3<f64>, extents: f64) -> (f64, f64) {
-    let sizes = up(ia.translation.vector.norm() + ib.translation.vector.norm() + extents);
-    (sizes, up(ORTHO_SLACK * sizes))
 }
 
 /// `simplex`, found at the relative pose `old12`, carried to `pos12`: its
