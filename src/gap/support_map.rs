@@ -99,6 +99,19 @@ enum Found {
     Nothing,
 }
 
+/// What the generators of a cylinder or cone told of it and a box
+/// ([`SupportMap::round_box_direction`]), in `a`'s frame.
+enum Generators {
+    /// The closest points' direction from `a` towards `b`, and their
+    /// distance.
+    Apart {
+        normal: Vector3<f64>,
+        distance: f64,
+    },
+    Overlap,
+    Unknown,
+}
+
 /// GJK simplices kept from the last queries of a pair, each with the
 /// relative pose it was at (see `SupportMap::first_simplex`): parry's `f32`
 /// one and the `f64` one of narrow nodes.
@@ -330,43 +343,34 @@ impl SupportMap {
     }
 
     /// What [`round_box`] finds of a cylinder or cone and a box (`None`
-    /// for other pairs), in `a`'s frame, its direction from `a` towards
-    /// `b`, started from the last node's direction.
-    fn round_box_direction(&self, rel: &Isometry3<f64>) -> Option<RoundBox> {
+    /// for other pairs), started from the last node's direction.
+    fn round_box_direction(&self, rel: &Isometry3<f64>) -> Option<Generators> {
         let last = self.last.get();
-        let found = match self.round_box? {
-            true => {
-                let start = last.map(|n| rel.rotation.inverse() * n);
-                match round_box(&self.a, &rel.inverse(), &self.b, start.as_ref()) {
-                    RoundBox::Apart {
-                        normal,
-                        on_round,
-                        on_box,
-                    } => RoundBox::Apart {
-                        normal: rel.rotation * normal,
-                        on_round: rel.transform_point(&on_round.into()).coords,
-                        on_box: rel.transform_point(&on_box.into()).coords,
-                    },
-                    other => other,
-                }
-            }
-            false => {
-                let start = last.map(|n| -n);
-                match round_box(&self.b, rel, &self.a, start.as_ref()) {
-                    RoundBox::Apart {
-                        normal,
-                        on_round,
-                        on_box,
-                    } => RoundBox::Apart {
-                        normal: -normal,
-                        on_round,
-                        on_box,
-                    },
-                    other => other,
-                }
-            }
+        // `round_box` works in the box's frame, from the round shape
+        // towards the box: carried to `a`'s frame, from `a` towards `b`.
+        let a_is_round = self.round_box?;
+        let found = if a_is_round {
+            let start = last.map(|n| rel.rotation.inverse() * n);
+            round_box(&self.a, &rel.inverse(), &self.b, start.as_ref())
+        } else {
+            round_box(&self.b, rel, &self.a, last.map(|n| -n).as_ref())
         };
-        Some(found)
+        Some(match found {
+            RoundBox::Apart {
+                normal,
+                on_round,
+                on_box,
+            } => Generators::Apart {
+                normal: if a_is_round {
+                    rel.rotation * normal
+                } else {
+                    -normal
+                },
+                distance: (on_box - on_round).norm(),
+            },
+            RoundBox::Overlap => Generators::Overlap,
+            RoundBox::Unknown => Generators::Unknown,
+        })
     }
 
     /// [`Self::direction`] where it has no closed form: GJK in `f64` on
@@ -407,8 +411,8 @@ impl SupportMap {
         // `Intersection` leads to below, without it: the last direction,
         // or on a wide node their shallowest own axis.
         match self.round_box_direction(&rel) {
-            Some(RoundBox::Apart { normal, .. }) => return (normal, None),
-            Some(RoundBox::Overlap) => {
+            Some(Generators::Apart { normal, .. }) => return (normal, None),
+            Some(Generators::Overlap) => {
                 if depth && coarse {
                     if let Some((_, n)) = self.shallowest_axis(&rel) {
                         return (n, None);
@@ -656,13 +660,9 @@ impl SupportMap {
         // overlap found there is as close as `f32` resolves, which reads
         // as touching below anyway).
         let generators = || match self.round_box_direction(&rel)? {
-            RoundBox::Apart {
-                normal,
-                on_round,
-                on_box,
-            } => Some(Some((normal, (on_box - on_round).norm()))),
-            RoundBox::Overlap => Some(None),
-            RoundBox::Unknown => None,
+            Generators::Apart { normal, distance } => Some(Some((normal, distance))),
+            Generators::Overlap => Some(None),
+            Generators::Unknown => None,
         };
         let closest = if self.overlap_witnessed(&rel) {
             Some(None)
