@@ -18,10 +18,10 @@
 //! formula contains the formula at the true `R`.
 
 use super::support::ORTHO_SLACK;
-use super::{KeptPose, Relative, Side, kept_pose_at, rounding_slack};
-use crate::enclosure::rounding::{down, up};
+use super::{Exact, Middle, Relative, Side};
+use crate::enclosure::rounding::up;
 use crate::enclosure::{Enclosure, TimeSpan};
-use crate::motion::{Motion, column, row};
+use crate::motion::{column, row};
 use nalgebra::Vector3;
 
 #[derive(Clone, Debug)]
@@ -64,19 +64,13 @@ impl CuboidCuboid {
     /// less how fast the gap along that direction can close
     /// ([`crate::motion::SpeedAlong`]) times the half-width. `None` where
     /// that is not positive.
-    pub fn apart_from_middle(
-        &self,
-        span: TimeSpan,
-        (ma, kept_a): (&Motion, &KeptPose),
-        (mb, kept_b): (&Motion, &KeptPose),
-    ) -> Option<f64> {
-        let (mid, h) = span.center_radius();
-        let (ia, ib) = (kept_pose_at(ma, kept_a, mid), kept_pose_at(mb, kept_b, mid));
-        let rel = ia.inv_mul(&ib);
-        // `b`'s axes in `a`'s frame, and its centre.
-        let r = rel.rotation.to_rotation_matrix().into_inner();
-        let t = rel.translation.vector;
+    pub fn apart_from_middle(&self, span: TimeSpan, a: Exact, b: Exact) -> Option<f64> {
         let (ha, hb) = (self.half_a, self.half_b);
+        let extent = |h: &Vector3<f64>| up(h.norm() * (1.0 + 1.0e-14));
+        let middle = Middle::new(span, a, b, (extent(&ha), extent(&hb)));
+        // `b`'s axes in `a`'s frame, and its centre.
+        let r = middle.rel.rotation.to_rotation_matrix().into_inner();
+        let t = middle.rel.translation.vector;
         let reach = |half: &Vector3<f64>, n: &Vector3<f64>| {
             half.x * n.x.abs() + half.y * n.y.abs() + half.z * n.z.abs()
         };
@@ -105,16 +99,7 @@ impl CuboidCuboid {
             }
         }
         let (gap, n) = best?;
-        let (extent_a, extent_b) = (
-            up(ha.norm() * (1.0 + 1.0e-14)),
-            up(hb.norm() * (1.0 + 1.0e-14)),
-        );
-        let (_, slack) = rounding_slack(&ia, &ib, extent_a + extent_b);
-        let speed = ma
-            .relative_speed_along(extent_a, mb, extent_b)
-            .at(&(ia.rotation * n));
-        let lo = down(down(gap - slack - self.skin) - up(speed * h));
-        (lo > 0.0).then_some(lo)
+        middle.apart(gap, self.skin, &(middle.ia.rotation * n))
     }
 
     #[inline(never)]

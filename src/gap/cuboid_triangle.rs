@@ -13,10 +13,9 @@
 //! those pairs use the adaptive family.
 
 use super::support::ORTHO_SLACK;
-use super::{KeptPose, Relative, Side, kept_pose_at, rounding_slack};
-use crate::enclosure::rounding::{down, up};
+use super::{Exact, Middle, Relative, Side};
+use crate::enclosure::rounding::up;
 use crate::enclosure::{Enclosure, TimeSpan, least_greatest};
-use crate::motion::Motion;
 use nalgebra::Vector3;
 
 #[derive(Clone, Debug)]
@@ -60,15 +59,12 @@ impl CuboidTriangle {
     /// less how fast the gap along that direction can close
     /// ([`crate::motion::SpeedAlong`]) times the half-width. `None` where
     /// that is not positive. `a` is the cuboid, `b` the triangle.
-    pub fn apart_from_middle(
-        &self,
-        span: TimeSpan,
-        (ma, kept_a): (&Motion, &KeptPose),
-        (mb, kept_b): (&Motion, &KeptPose),
-    ) -> Option<f64> {
-        let (mid, h) = span.center_radius();
-        let (ia, ib) = (kept_pose_at(ma, kept_a, mid), kept_pose_at(mb, kept_b, mid));
-        let rel = ia.inv_mul(&ib);
+    pub fn apart_from_middle(&self, span: TimeSpan, a: Exact, b: Exact) -> Option<f64> {
+        let extent_a = up(self.half.norm() * (1.0 + 1.0e-14));
+        let corners = self.corners.iter().map(|c| c.norm()).fold(0.0, f64::max);
+        let extent_b = up(corners * (1.0 + 1.0e-14));
+        let middle = Middle::new(span, a, b, (extent_a, extent_b));
+        let rel = middle.rel;
         // The triangle's corners and edges in the box's frame.
         let v = self
             .corners
@@ -106,14 +102,7 @@ impl CuboidTriangle {
             }
         }
         let (gap, l) = best?;
-        let n = ia.rotation * l.normalize();
-        let extent_a = up(half.norm() * (1.0 + 1.0e-14));
-        let extent_b =
-            up(self.corners.iter().map(|c| c.norm()).fold(0.0, f64::max) * (1.0 + 1.0e-14));
-        let (_, slack) = rounding_slack(&ia, &ib, extent_a + extent_b);
-        let speed = ma.relative_speed_along(extent_a, mb, extent_b).at(&n);
-        let lo = down(down(gap - slack - self.pad) - up(speed * h));
-        (lo > 0.0).then_some(lo)
+        middle.apart(gap, self.pad, &(middle.ia.rotation * l.normalize()))
     }
 
     /// `a` is the cuboid, `b` the triangle.

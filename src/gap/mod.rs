@@ -54,10 +54,10 @@ pub(crate) use support_map::{SupportMap, beside_axis, segment_box, segment_segme
 pub(crate) use triangle_triangle::TriangleTriangle;
 
 use crate::convert::vec_from_glam;
-use crate::enclosure::rounding::up;
+use crate::enclosure::rounding::{down, up};
 use crate::enclosure::{Enclosure, TimeSpan};
 use crate::error::{CcdError, check_finite};
-use crate::motion::{Motion, Pose, Trajectory};
+use crate::motion::{Motion, Pose, SpeedAlong, Trajectory};
 use nalgebra::{Isometry3, Vector3};
 use rapier3d::parry::math::Vector;
 use rapier3d::parry::shape::{Ball, Segment, Shape, Triangle, TypedShape};
@@ -114,6 +114,60 @@ pub(crate) fn kept_pose_at(motion: &Motion, kept: &KeptPose, t: f64) -> Isometry
 pub(crate) fn rounding_slack(ia: &Isometry3<f64>, ib: &Isometry3<f64>, extents: f64) -> (f64, f64) {
     let sizes = up(ia.translation.vector.norm() + ib.translation.vector.norm() + extents);
     (sizes, up(ORTHO_SLACK * sizes))
+}
+
+/// A side's motion and its exact pose kept for the node (see
+/// [`kept_pose_at`]): what a middle test reads of it.
+pub(crate) type Exact<'a> = (&'a Motion, &'a KeptPose);
+
+/// Two sides at the exact poses of a node's middle, for the middle tests
+/// of a fast spin's pieces (`apart_from_middle`): a gap found there along a
+/// direction fixed in the world bounds the gap over the whole node, less
+/// how fast it can close along that direction ([`SpeedAlong`]) times the
+/// half-width, with no pose enclosed.
+pub(crate) struct Middle {
+    pub ia: Isometry3<f64>,
+    pub ib: Isometry3<f64>,
+    /// `b`'s pose in `a`'s frame.
+    pub rel: Isometry3<f64>,
+    half_width: f64,
+    /// See [`rounding_slack`].
+    slack: f64,
+    speeds: SpeedAlong,
+}
+
+impl Middle {
+    /// `extents`: how far each shape reaches from its frame's origin,
+    /// metres.
+    #[inline]
+    pub fn new(
+        span: TimeSpan,
+        (ma, kept_a): Exact,
+        (mb, kept_b): Exact,
+        (extent_a, extent_b): (f64, f64),
+    ) -> Middle {
+        let (mid, half_width) = span.center_radius();
+        let (ia, ib) = (kept_pose_at(ma, kept_a, mid), kept_pose_at(mb, kept_b, mid));
+        let (_, slack) = rounding_slack(&ia, &ib, extent_a + extent_b);
+        Middle {
+            rel: ia.inv_mul(&ib),
+            ia,
+            ib,
+            half_width,
+            slack,
+            speeds: ma.relative_speed_along(extent_a, mb, extent_b),
+        }
+    }
+
+    /// A positive lower bound over the node of the gap beyond `skin`, from
+    /// `gap`, the shapes' gap at the middle along the world unit direction
+    /// `n` (either way: the speed bound reads both); `None` where it is not
+    /// positive.
+    #[inline]
+    pub fn apart(&self, gap: f64, skin: f64, n: &Vector3<f64>) -> Option<f64> {
+        let lo = down(down(gap - self.slack - skin) - up(self.speeds.at(n) * self.half_width));
+        (lo > 0.0).then_some(lo)
+    }
 }
 
 /// Each side of a pair seen from the other over a node, where the search
@@ -239,12 +293,7 @@ impl PairGap {
     /// A positive lower bound of the gap over `span` from the exact poses
     /// at its middle, where the family has one that proves the pair apart
     /// (see `SupportMap::apart_from_middle`).
-    pub fn apart_from_middle(
-        &self,
-        span: TimeSpan,
-        a: (&Motion, &KeptPose),
-        b: (&Motion, &KeptPose),
-    ) -> Option<f64> {
+    pub fn apart_from_middle(&self, span: TimeSpan, a: Exact, b: Exact) -> Option<f64> {
         match self {
             PairGap::SupportMap(g) => g.apart_from_middle(span, a, b),
             PairGap::CuboidCuboid(g) => g.apart_from_middle(span, a, b),

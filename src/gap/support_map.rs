@@ -48,12 +48,12 @@
 //! node it proves apart needs no query.
 
 use super::support::{Convex, Core, ORTHO_SLACK, dot, norm_up, tr_mul};
-use super::{KeptPose, Side, kept_pose_at, rounding_slack};
+use super::{Exact, Middle, Side, rounding_slack};
 use super::{RoundBox, round_box};
 use crate::convert::{glam_from_vec, pose_from_iso, pose64_from_iso, vec_from_glam};
 use crate::enclosure::rounding::{down, up};
 use crate::enclosure::{Enclosure, Interval, TimeSpan};
-use crate::motion::{Motion, Trajectory};
+use crate::motion::Trajectory;
 use nalgebra::{Isometry3, Vector3};
 use parry3d_f64::math::{Pose as Pose64, Vector as Vec64};
 use parry3d_f64::query::gjk::{
@@ -846,31 +846,20 @@ impl SupportMap {
     /// direction found at the middle is then kept for `eval` on the node.
     /// The poses at the middle and the supports are rounded a few times in
     /// terms no larger than the shapes' sizes and positions, which
-    /// [`rounding_slack`] covers (as in [`Self::eval_at_a_time`]).
+    /// [`Middle`] pads for (as [`Self::eval_at_a_time`] does).
     ///
     /// [`SpeedAlong`]: crate::motion::SpeedAlong
-    pub fn apart_from_middle(
-        &self,
-        span: TimeSpan,
-        (ma, kept_a): (&Motion, &KeptPose),
-        (mb, kept_b): (&Motion, &KeptPose),
-    ) -> Option<f64> {
-        let (mid, h) = span.center_radius();
-        let (ia, ib) = (kept_pose_at(ma, kept_a, mid), kept_pose_at(mb, kept_b, mid));
-        let rel = ia.inv_mul(&ib);
-        let (extent_a, extent_b) = (self.a.extent(), self.b.extent());
-        let speeds = ma.relative_speed_along(extent_a, mb, extent_b);
-        let (_, slack) = rounding_slack(&ia, &ib, extent_a + extent_b);
+    pub fn apart_from_middle(&self, span: TimeSpan, a: Exact, b: Exact) -> Option<f64> {
+        let middle = Middle::new(span, a, b, (self.a.extent(), self.b.extent()));
         let apart = |n: &Vector3<f64>| {
-            let gap = self.gap_along(&(ia.rotation.inverse() * n), &rel);
-            let lo = down(down(gap - slack - self.skin) - up(speeds.at(n) * h));
-            (lo > 0.0).then_some(lo)
+            let gap = self.gap_along(&(middle.ia.rotation.inverse() * n), &middle.rel);
+            middle.apart(gap, self.skin, n)
         };
         if let Some(lo) = self.last_world.get().and_then(|n| apart(&n)) {
             return Some(lo);
         }
-        let (m, _) = self.direction(&ia, &ib, span.hi - span.lo);
-        let n = ia.rotation * m;
+        let (m, _) = self.direction(&middle.ia, &middle.ib, span.hi - span.lo);
+        let n = middle.ia.rotation * m;
         self.last.set(Some(m));
         self.last_world.set(Some(n));
         let found = apart(&n);
