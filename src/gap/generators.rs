@@ -151,7 +151,8 @@ pub(crate) fn round_box(
     let mut converged = false;
     let (mut last_step, mut last_slope) = (0.0f64, 0.0f64);
     for _ in 0..MOST_STEPS {
-        if (p - q).norm_squared() <= (1.0e-9 * scale).powi(2) {
+        let d2 = (p - q).norm_squared();
+        if d2 <= (1.0e-9 * scale).powi(2) {
             return RoundBox::Overlap;
         }
         // Flat in `φ`: a cone's apex nearest the box, or a minimum met.
@@ -183,7 +184,6 @@ pub(crate) fn round_box(
         // is flat to fourth order. Newton's step on the distance itself,
         // `-d'/d''` with `d' = f'/d` and `d'' = (f'' − d'²)/d`, is exact
         // there.
-        let d2 = (p - q).norm_squared();
         if curvature > 0.0
             && step * last_step > 0.0
             && step.abs() > 0.3 * last_step.abs()
