@@ -10,15 +10,20 @@
 //! for the closest points `p` (on the segment) and `q` (in the box), since
 //! `p` is the segment's closest point (the envelope theorem).
 //!
-//! What it finds is checked, not trusted: the gap of the shapes along the
-//! found direction (their supports, exact) must match the distance of the
-//! found points, which no two points of the shapes undercut. So the
-//! direction is the closest points' one wherever it is returned; where the
-//! search stalls, or found a minimum that is not the least (a cap's flat
-//! face nearest the box, which no generator reaches), it returns `None`
-//! and the caller asks GJK. (parry's `f32` GJK creeps along a rim or the
-//! cone's side: about 11 k instructions a call on the queries bench's
-//! cylinder cases, most of a query's direction cost.)
+//! A flat cap's inside, which no generator reaches, is tested first: where
+//! the box's point deepest towards a cap lies over it, that point and its
+//! foot on the cap are the closest points (as `face_box` has it for a
+//! box's face).
+//!
+//! What the search finds is checked, not trusted: the gap of the shapes
+//! along the found direction (their supports, exact) must match the
+//! distance of the found points, which no two points of the shapes
+//! undercut. So the direction is the closest points' one wherever it is
+//! returned; where the search stalls, or found a minimum that is not the
+//! least, it answers `Unknown` and the caller asks GJK. (parry's `f32`
+//! GJK creeps along a rim or the cone's side: about 11 k instructions a
+//! call on the queries bench's cylinder cases, most of a query's direction
+//! cost.)
 
 use super::support::{Convex, Core};
 use super::support_map::segment_box;
@@ -88,6 +93,28 @@ pub(crate) fn round_box(
         r.matrix().column(2).into_owned(),
     );
     let centre = pose.translation.vector;
+    // A flat cap facing the box over which the box's deepest point lies
+    // (no generator reaches a cap's inside): that point and its foot on
+    // the cap are exactly the gap along the cap's normal apart.
+    let caps: &[f64] = if cone { &[-1.0] } else { &[-1.0, 1.0] };
+    for &side in caps {
+        let n = axis * side;
+        let cap = centre + n * half_height;
+        let deepest = Vector3::new(
+            -half.x.copysign(n.x),
+            -half.y.copysign(n.y),
+            -half.z.copysign(n.z),
+        );
+        let height = (deepest - cap).dot(&n);
+        let foot = deepest - n * height;
+        if height > 0.0 && (foot - cap).norm_squared() <= radius * radius {
+            return RoundBox::Apart {
+                normal: n,
+                on_round: foot,
+                on_box: deepest,
+            };
+        }
+    }
     // The generator at the angle `φ` whose cosine and sine are `(c, s)`
     // (its ends), how its points move with `φ` at a fixed segment
     // parameter `t` (`turn`, times `t` for a cone, whose apex stays) and
