@@ -17,7 +17,7 @@
 //! classic OBB form); the true `R` is a rotation, and the enclosure of the
 //! formula contains the formula at the true `R`.
 
-use super::support::ORTHO_SLACK;
+use super::support::{ORTHO_SLACK, box_reach, padded_extent};
 use super::{Exact, Middle, Relative, Side};
 use crate::enclosure::rounding::up;
 use crate::enclosure::{Enclosure, TimeSpan};
@@ -66,19 +66,16 @@ impl CuboidCuboid {
     /// that is not positive.
     pub fn apart_from_middle(&self, span: TimeSpan, a: Exact, b: Exact) -> Option<f64> {
         let (ha, hb) = (self.half_a, self.half_b);
-        let extent = |h: &Vector3<f64>| up(h.norm() * (1.0 + 1.0e-14));
-        let middle = Middle::new(span, a, b, (extent(&ha), extent(&hb)));
+        let extents = (padded_extent(ha.norm()), padded_extent(hb.norm()));
+        let middle = Middle::new(span, a, b, extents);
         // `b`'s axes in `a`'s frame, and its centre.
         let r = middle.rel.rotation.to_rotation_matrix().into_inner();
         let t = middle.rel.translation.vector;
-        let reach = |half: &Vector3<f64>, n: &Vector3<f64>| {
-            half.x * n.x.abs() + half.y * n.y.abs() + half.z * n.z.abs()
-        };
         // The gap along the unit axis `l / |l|`, from `a` towards `b`.
         let along = |l: Vector3<f64>| {
             let n = l.try_normalize(1.0e-6)?;
             let n = if n.dot(&t) < 0.0 { -n } else { n };
-            let gap = n.dot(&t) - reach(&ha, &n) - reach(&hb, &(r.transpose() * n));
+            let gap = n.dot(&t) - box_reach(&ha, &n) - box_reach(&hb, &(r.transpose() * n));
             Some((gap, n))
         };
         let mut best: Option<(f64, Vector3<f64>)> = None;

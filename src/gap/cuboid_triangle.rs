@@ -12,7 +12,7 @@
 //! or a border, corners would count as close early (as for two boxes), so
 //! those pairs use the adaptive family.
 
-use super::support::ORTHO_SLACK;
+use super::support::{ORTHO_SLACK, box_reach, padded_extent};
 use super::{Exact, Middle, Relative, Side};
 use crate::enclosure::rounding::up;
 use crate::enclosure::{Enclosure, TimeSpan, least_greatest};
@@ -60,10 +60,9 @@ impl CuboidTriangle {
     /// ([`crate::motion::SpeedAlong`]) times the half-width. `None` where
     /// that is not positive. `a` is the cuboid, `b` the triangle.
     pub fn apart_from_middle(&self, span: TimeSpan, a: Exact, b: Exact) -> Option<f64> {
-        let extent_a = up(self.half.norm() * (1.0 + 1.0e-14));
         let corners = self.corners.iter().map(|c| c.norm()).fold(0.0, f64::max);
-        let extent_b = up(corners * (1.0 + 1.0e-14));
-        let middle = Middle::new(span, a, b, (extent_a, extent_b));
+        let extents = (padded_extent(self.half.norm()), padded_extent(corners));
+        let middle = Middle::new(span, a, b, extents);
         let rel = middle.rel;
         // The triangle's corners and edges in the box's frame.
         let v = self
@@ -76,7 +75,7 @@ impl CuboidTriangle {
         // box the triangle lies.
         let along = |l: Vector3<f64>| {
             let n = l.try_normalize(1.0e-6)?;
-            let reach = half.x * n.x.abs() + half.y * n.y.abs() + half.z * n.z.abs();
+            let reach = box_reach(&half, &n);
             let (lo, hi) = v
                 .iter()
                 .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {

@@ -25,7 +25,7 @@
 //! call on the queries bench's cylinder cases, most of a query's direction
 //! cost.)
 
-use super::support::{Convex, Core};
+use super::support::{Convex, Core, box_reach};
 use super::support_map::segment_box;
 use nalgebra::{Isometry3, Vector3};
 
@@ -242,8 +242,7 @@ pub(crate) fn round_box(
     let n = between / distance;
     // The gap along `n`: the box's nearest reach less the round shape's
     // farthest, both exact.
-    let box_reach = half.x * n.x.abs() + half.y * n.y.abs() + half.z * n.z.abs();
-    let gap = -box_reach
+    let gap = -box_reach(half, &n)
         - n.dot(&centre)
         - round.support_f64(&pose.rotation.inverse_transform_vector(&n));
     if gap >= distance * (1.0 - AGREEMENT) - 1.0e-12 * scale {
@@ -318,8 +317,7 @@ mod tests {
                     let local = pose.inverse_transform_vector(&(on_round - pose.translation.vector));
                     prop_assert!(local.y.abs() <= half_height * (1.0 + 1.0e-12));
                     prop_assert!(((on_box - on_round).norm() - distance).abs() <= 1.0e-4 * distance + 1.0e-9);
-                    let box_reach = half[0] * n.x.abs() + half[1] * n.y.abs() + half[2] * n.z.abs();
-                    let gap = -box_reach - n.dot(&pose.translation.vector)
+                    let gap = -box_reach(&Vector3::from(half), &n) - n.dot(&pose.translation.vector)
                         - round.support_f64(&pose.rotation.inverse_transform_vector(&n));
                     prop_assert!(
                         (gap - distance).abs() <= 1.0e-4 * distance + 1.0e-9,

@@ -365,9 +365,23 @@ impl Convex {
                 radius,
             } => half_height.hypot(*radius),
         };
-        // A relative error of a few ulps in the norms is covered many times.
-        up((core + self.border) * (1.0 + 1.0e-14))
+        padded_extent(core + self.border)
     }
+}
+
+/// An extent `x` (metres) computed from norms, rounded up: a relative
+/// error of a few ulps in the norms is covered many times.
+#[inline]
+pub(crate) fn padded_extent(x: f64) -> f64 {
+    up(x * (1.0 + 1.0e-14))
+}
+
+/// How far a box of half-extents `half` centred at the origin reaches
+/// along `d`, `Σ h_i·|d_i|`, in plain `f64` (not rounded up, as
+/// [`Convex::support_f64`] has it).
+#[inline]
+pub(crate) fn box_reach(half: &Vector3<f64>, d: &Vector3<f64>) -> f64 {
+    d.x.abs() * half.x + d.y.abs() * half.y + d.z.abs() * half.z
 }
 
 /// `v·w` for an enclosed `v` and a fixed `w`.
