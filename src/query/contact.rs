@@ -97,6 +97,46 @@ pub(crate) fn contact_settled(
     }))
 }
 
+/// A pair's contact at the start of a step, or only the direction that
+/// shows it apart beyond its band (see [`start_contact`]).
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum StartContact {
+    /// [`contact`]'s answer.
+    Found(Option<Contact>),
+    /// Apart by more than the band along this unit world direction, from
+    /// the first shape towards the second.
+    ApartAlong(Vector),
+}
+
+/// [`contact`] of two posed shapes within `prediction`, except that two
+/// boxes or triangles whose separating axes show them apart by more than
+/// `band` get that axis instead of parry's distance (GJK): a pair beyond
+/// its band needs only a direction along which it stays apart.
+pub(crate) fn start_contact(
+    pose1: &Pose,
+    shape1: &dyn Shape,
+    pose2: &Pose,
+    shape2: &dyn Shape,
+    band: f64,
+    prediction: f32,
+) -> Result<StartContact, Unsupported> {
+    if !sat::handles(shape1, shape2) {
+        return contact(pose1, shape1, pose2, shape2, prediction).map(StartContact::Found);
+    }
+    let pos12 = pose1.inv_mul(pose2);
+    let axes = sat::contact(&pos12, shape1, shape2, prediction as f64);
+    if let SatAnswer::Apart(n, sep) = axes
+        && sep > band
+    {
+        return Ok(StartContact::ApartAlong(pose1.rotation * glam_from_vec(&n)));
+    }
+    let found = AxesFirst.polytopes(&pos12, shape1, shape2, prediction, axes)?;
+    Ok(StartContact::Found(found.map(|mut c| {
+        c.transform_by_mut(pose1, pose2);
+        c
+    })))
+}
+
 /// The contact of a posed capsule or cylinder and a box (either order)
 /// from the closest points of its axis segment and the box, in closed form
 /// (`crate::gap::segment_box`, in `f64`), where parry would run GJK (whose
@@ -347,7 +387,7 @@ impl AxesFirst {
         match sat {
             SatAnswer::Beyond => return Ok(None),
             SatAnswer::Overlap(c) => return Ok(Some(c)),
-            SatAnswer::Apart(axis) => {
+            SatAnswer::Apart(axis, _) => {
                 if let (Some(s1), Some(s2)) = (g1.as_support_map(), g2.as_support_map()) {
                     return Ok(gjk_contact(pos12, s1, s2, prediction, axis));
                 }

@@ -36,7 +36,7 @@ mod sat;
 
 #[cfg(test)]
 pub(crate) use contact::cross_mesh;
-pub(crate) use contact::{Settle, Witness, contact, contact_settled};
+pub(crate) use contact::{Settle, StartContact, Witness, contact, contact_settled, start_contact};
 pub use primitives::{PrimitiveToi, edge_edge_toi, vertex_face_toi};
 
 use crate::enclosure::{Arithmetic, TimeSpan};

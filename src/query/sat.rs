@@ -42,8 +42,8 @@ pub(crate) enum SatAnswer {
     /// Apart along some axis, by less than the prediction: the axes do not
     /// give the distance (ask parry; the unit axis that separates most, in
     /// the first shape's frame from the first towards the second, is a
-    /// good first direction for its GJK).
-    Apart(Vector3<f64>),
+    /// good first direction for its GJK), and by how much along it.
+    Apart(Vector3<f64>, f64),
     /// Not a box or triangle pair, or not finite: parry answers as it can.
     Unknown,
     /// Overlapping or touching: the contact (points and normals each in
@@ -350,7 +350,7 @@ pub(crate) fn contact_placed(shape1: &dyn Shape, placed: &Placed, prediction: f6
         return SatAnswer::Unknown;
     }
     if sep > 0.0 {
-        return SatAnswer::Apart(n);
+        return SatAnswer::Apart(n, sep);
     }
     // `sep ≤ 0` is minus the depth. The witness: the deepest point of the
     // shape whose face is not the axis, and where it leaves the other
@@ -472,7 +472,7 @@ mod tests {
                     assert!(parry.is_none(), "case {case}: parry sees {parry:?}");
                 }
                 SatAnswer::Unknown => panic!("case {case}: no answer"),
-                SatAnswer::Apart(_) => {
+                SatAnswer::Apart(..) => {
                     // Apart by at least the largest separation: parry's
                     // distance may still be beyond the prediction.
                     if let Some(c) = parry {

@@ -18,7 +18,7 @@ use crate::convert::{pose_from_iso, vec_from_glam};
 use crate::enclosure::TimeSpan;
 use crate::error::CcdError;
 use crate::motion::{Motion, Trajectory};
-use crate::query::{QueryOptions, ShapeMotion, Toi, Witness};
+use crate::query::{QueryOptions, ShapeMotion, StartContact, Toi, Witness, start_contact};
 use crate::solve::RootStatus;
 use rapier3d::parry::bounding_volume::{Aabb, BoundingVolume};
 use rapier3d::parry::query::{Contact, QueryDispatcher};
@@ -429,7 +429,29 @@ fn earliest_piece(
         } else {
             band_reach
         };
-        match start_gap(t, ask) {
+        // Two polytopes whose separating axes show them apart beyond the
+        // band need no distance from parry (GJK) if they stay apart along
+        // the axis that shows it; else their start gap as any pair's.
+        let start = if convex {
+            let found = start_contact(
+                &pose_from_iso(&moving.motion.pose_at(lo)),
+                moving.shape,
+                &pose_from_iso(&t.motion.pose_at(lo)),
+                t.shape,
+                band_reach,
+                ask as f32,
+            );
+            match found {
+                Ok(StartContact::ApartAlong(n)) if apart_along(moving, t, n) => continue,
+                Ok(StartContact::ApartAlong(_)) => start_gap(t, ask),
+                Ok(StartContact::Found(Some(c))) => Some((c.dist as f64, Some(c))),
+                Ok(StartContact::Found(None)) => Some((ask, None)),
+                Err(_) => None,
+            }
+        } else {
+            start_gap(t, ask)
+        };
+        match start {
             Some(start) if start.0 <= bands[j] => {
                 if let Some(found) = close(j, start, report)? {
                     keep(found);
