@@ -441,6 +441,15 @@ impl Motion {
         self.displacement + self.bend
     }
 
+    /// How fast the world point `at`, carried by the frame at step fraction
+    /// `tau`, moves, metres per step: the centre's mean velocity over the
+    /// step plus the turn's about where the centre is at `tau` (the
+    /// acceleration's share left out: an estimate, for guesses).
+    pub fn point_velocity(&self, at: &Vector3<f64>, tau: f64) -> Vector3<f64> {
+        let centre = self.center.coords + self.displacement() * tau;
+        self.displacement() + self.rotation.cross(&(at - centre))
+    }
+
     /// True when the frame turns during the step (a turn below any length
     /// scale, see `Spin::NEGLIGIBLE`, counts as none).
     pub fn turns(&self) -> bool {

@@ -264,12 +264,8 @@ pub(super) fn touching_pair(
 /// the target. About 0 for a body rolling on the target.
 fn contact_approach(moving: &Motion, target: &Motion, c: &Contact, tau: f64) -> f64 {
     let at = (vec_from_glam(c.point1) + vec_from_glam(c.point2)) * 0.5;
-    let velocity = |m: &Motion| {
-        let centre = m.center().coords + m.displacement() * tau;
-        m.displacement() + m.rotation().cross(&(at - centre))
-    };
     let normal = vec_from_glam(c.normal1);
-    normal.dot(&(velocity(moving) - velocity(target)))
+    normal.dot(&(moving.point_velocity(&at, tau) - target.point_velocity(&at, tau)))
 }
 
 /// Whether parry's depth against `shape` is one least translation (a
