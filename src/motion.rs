@@ -24,6 +24,7 @@ use crate::enclosure::rounding::{bound, up};
 use crate::enclosure::{Enclosure, Interval, TimeSpan};
 use crate::error::{CcdError, check_finite};
 use nalgebra::{Isometry3, Matrix3, Point3, Translation3, UnitQuaternion, Vector3};
+use smallvec::SmallVec;
 use std::f64::consts::{FRAC_PI_2, TAU};
 
 /// A rigid pose with enclosed entries: `x ↦ rotation·x + translation`.
@@ -861,7 +862,7 @@ struct Advance {
     quad: f64,
     phi: f64,
     /// `(A_i, B_i, behind_i)` per point.
-    terms: Vec<(f64, f64, f64)>,
+    terms: SmallVec<[(f64, f64, f64); 8]>,
     /// A bound of the second derivative in `τ` of every point's advance by
     /// the turn alone.
     curvature: f64,
@@ -877,28 +878,26 @@ impl Advance {
         } else {
             Vector3::zeros()
         };
-        // Each point's arm from the rotation centre at the start.
-        let arms: Vec<Vector3<f64>> = points
-            .iter()
-            .map(|p| motion.arm + motion.start_matrix * p)
-            .collect();
-        let ahead = arms
-            .iter()
-            .map(|w| n.dot(w))
-            .fold(f64::NEG_INFINITY, f64::max);
-        let terms: Vec<(f64, f64, f64)> = arms
-            .iter()
-            .map(|w| {
-                let a = n.dot(&k.cross(w));
-                let b = n.dot(&k) * k.dot(w) - n.dot(w);
-                (a, b, ahead - n.dot(w))
-            })
-            .collect();
+        // Per point, from its arm `w` from the rotation centre at the
+        // start: `(A, B, n·w)`, the last made how far behind the farthest
+        // point it starts once that is known. On the stack up to a box's
+        // eight corners: this runs for every pair such a bound is asked of.
+        let mut terms: SmallVec<[(f64, f64, f64); 8]> = SmallVec::with_capacity(points.len());
+        let (mut ahead, mut reach) = (f64::NEG_INFINITY, 0.0f64);
+        for p in points {
+            let w = motion.arm + motion.start_matrix * p;
+            let along = n.dot(&w);
+            ahead = ahead.max(along);
+            reach = reach.max(w.norm());
+            terms.push((n.dot(&k.cross(&w)), n.dot(&k) * k.dot(&w) - along, along));
+        }
+        for term in &mut terms {
+            term.2 = ahead - term.2;
+        }
         let turn = terms
             .iter()
             .map(|(a, b, _)| a.abs() + b.abs())
             .fold(0.0, f64::max);
-        let reach = arms.iter().map(|w| w.norm()).fold(0.0, f64::max);
         let (lin, quad) = (n.dot(&motion.displacement), n.dot(&motion.bend));
         Advance {
             lin,
