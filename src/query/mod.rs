@@ -177,7 +177,8 @@ thread_local! {
 /// context is in use (a query asked while another runs on this thread,
 /// which the crate itself never does; the dispatcher's casts, on rapier's
 /// worker threads with its `parallel` feature, each get their thread's).
-fn with_query<T>(f: impl FnOnce(&mut Query) -> T) -> T {
+/// The rapier stage's counted queries run here too.
+pub(crate) fn with_query<T>(f: impl FnOnce(&mut Query) -> T) -> T {
     QUERY.with(|cell| match cell.try_borrow_mut() {
         Ok(mut query) => f(&mut query),
         Err(_) => f(&mut Query::new()),

@@ -5,10 +5,12 @@
 use super::report::CcdReport;
 use crate::error::CcdError;
 use crate::motion::Motion;
-use crate::query::{ManyToi, Query, QueryOptions, ShapeMotion, Toi};
+use crate::query::{ManyToi, QueryOptions, ShapeMotion, Toi, with_query};
 use rapier3d::parry::shape::Shape;
 
-/// [`crate::query::time_of_impact`], counted.
+/// [`crate::query::time_of_impact`], counted. Both run on the thread's
+/// query context, whose buffers are kept between calls (a fresh context
+/// grows them anew on every search).
 pub(crate) fn one(
     s1: &dyn Shape,
     m1: &Motion,
@@ -17,10 +19,11 @@ pub(crate) fn one(
     opts: &QueryOptions,
     report: &mut CcdReport,
 ) -> Result<Option<Toi>, CcdError> {
-    let mut query = Query::new();
-    let found = query.one(s1, m1, s2, m2, opts);
-    report.evaluations += query.spent().pair_evaluations;
-    found
+    with_query(|query| {
+        let found = query.one(s1, m1, s2, m2, opts);
+        report.evaluations += query.spent().pair_evaluations;
+        found
+    })
 }
 
 /// [`crate::query::time_of_impact_many`], counted.
@@ -30,8 +33,9 @@ pub(crate) fn many(
     opts: &QueryOptions,
     report: &mut CcdReport,
 ) -> Result<Option<ManyToi>, CcdError> {
-    let mut query = Query::new();
-    let found = query.many(moving, targets, opts);
-    report.evaluations += query.spent().pair_evaluations;
-    found
+    with_query(|query| {
+        let found = query.many(moving, targets, opts);
+        report.evaluations += query.spent().pair_evaluations;
+        found
+    })
 }
