@@ -561,9 +561,9 @@ const ACCEPT: f64 = 1.0e-6;
 /// far below the slop at any speed rapier allows).
 const BISECTIONS: usize = 24;
 
-/// An unrounded pair's stop: the latest time before its true contact
-/// (`toi`, a hit at zero skin) at which parry's gap is still above `gap`,
-/// found by bisection to within parry's tolerance. The pair is apart at
+/// An unrounded pair's stop: a time before its true contact (`toi`, a hit
+/// at zero skin) at which parry's gap is above `gap` by at most
+/// [`ACCEPT`] (else the latest found above it). The pair is apart at
 /// every time before the contact, so any such time is sound; `None` when
 /// the pair is within the tolerance of `gap` already at `from` (parry's
 /// sweep answers such a pair with a hit at time 0, which rapier's CCD

@@ -12,7 +12,7 @@ use super::candidates::{
 use super::moved::Moved;
 use super::report::CcdReport;
 use super::search;
-use super::touching::{gap_at, never_as_deep, past_band, touching_pair};
+use super::touching::{gap_at, never_as_deep, past_band, read_gap, touching_pair};
 use super::world::{MotionCache, StageWorld, StepMotions};
 use crate::convert::{pose_from_iso, vec_from_glam};
 use crate::enclosure::TimeSpan;
@@ -444,9 +444,8 @@ fn earliest_piece(
             match found {
                 Ok(StartContact::ApartAlong(n)) if apart_along(moving, t, n) => continue,
                 Ok(StartContact::ApartAlong(_)) => start_gap(t, ask),
-                Ok(StartContact::Found(Some(c))) => Some((c.dist as f64, Some(c))),
-                Ok(StartContact::Found(None)) => Some((ask, None)),
-                Err(_) => None,
+                Ok(StartContact::Found(c)) => read_gap(Ok(c), ask),
+                Err(e) => read_gap(Err(e), ask),
             }
         } else {
             start_gap(t, ask)

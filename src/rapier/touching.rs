@@ -16,7 +16,7 @@ use crate::error::CcdError;
 use crate::motion::{Motion, Trajectory};
 use crate::query::{QueryOptions, Settle, ShapeMotion, Toi, Witness, contact_settled};
 use crate::solve::RootStatus;
-use rapier3d::parry::query::Contact;
+use rapier3d::parry::query::{Contact, Unsupported};
 use rapier3d::parry::shape::Shape;
 
 /// Signed gap at step fraction `tau` (negative: penetration depth), with
@@ -36,7 +36,17 @@ pub(super) fn gap_at(
 ) -> Option<(f64, Option<Contact>)> {
     let p1 = pose_from_iso(&m1.pose_at(tau));
     let p2 = pose_from_iso(&m2.pose_at(tau));
-    let found = contact_settled(&p1, s1, &p2, s2, reach as f32, settle);
+    read_gap(
+        contact_settled(&p1, s1, &p2, s2, reach as f32, settle),
+        reach,
+    )
+}
+
+/// A gap as [`gap_at`] reads parry's contact asked within `reach`.
+pub(super) fn read_gap(
+    found: Result<Option<Contact>, Unsupported>,
+    reach: f64,
+) -> Option<(f64, Option<Contact>)> {
     match found {
         Ok(Some(c)) => Some((c.dist as f64, Some(c))),
         Ok(None) => Some((reach, None)),
