@@ -757,11 +757,52 @@ pub(crate) fn cross_mesh(long: f32, wide: f32, thick: f32) -> rapier3d::parry::s
     rapier3d::parry::shape::TriMesh::new(corners, indices).expect("a closed mesh")
 }
 
+/// A wavy 8 × 8 m floor as a triangle mesh, and as a heightfield.
+#[cfg(test)]
+pub(crate) fn floors() -> (
+    rapier3d::parry::shape::TriMesh,
+    rapier3d::parry::shape::HeightField,
+) {
+    let n = 9;
+    let height = |i: usize, j: usize| 0.3 * ((i as f32 * 0.9).sin() + (j as f32 * 0.7).cos());
+    let mesh = grid(n, 1.0, height);
+    let heights = rapier3d::parry::utils::Array2::from_fn(n, n, height);
+    let field = rapier3d::parry::shape::HeightField::new(heights, Vector::new(8.0, 1.0, 8.0));
+    (mesh, field)
+}
+
+/// A square grid of `n × n` vertices `spacing` apart about the origin,
+/// at `height(i, j)`, two triangles a cell.
+#[cfg(test)]
+pub(crate) fn grid(
+    n: usize,
+    spacing: f32,
+    height: impl Fn(usize, usize) -> f32,
+) -> rapier3d::parry::shape::TriMesh {
+    let half = spacing * (n - 1) as f32 / 2.0;
+    let mut vertices = Vec::new();
+    let mut indices = Vec::new();
+    for i in 0..n {
+        for j in 0..n {
+            let (x, z) = (spacing * i as f32 - half, spacing * j as f32 - half);
+            vertices.push(Vector::new(x, height(i, j), z));
+        }
+    }
+    for i in 0..n - 1 {
+        for j in 0..n - 1 {
+            let k = (i * n + j) as u32;
+            indices.push([k, k + 1, k + n as u32]);
+            indices.push([k + 1, k + n as u32 + 1, k + n as u32]);
+        }
+    }
+    rapier3d::parry::shape::TriMesh::new(vertices, indices).expect("a valid mesh")
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use rapier3d::math::Rotation;
-    use rapier3d::parry::shape::{Ball, Capsule, Cuboid, HeightField, TriMesh, Triangle};
+    use rapier3d::parry::shape::{Ball, Capsule, Cuboid, Triangle};
 
     /// Seeded numbers in `[0, 1)` (a linear congruential generator).
     fn uniform(mut seed: u64) -> impl FnMut() -> f32 {
@@ -771,38 +812,6 @@ mod tests {
                 .wrapping_add(1442695040888963407);
             (seed >> 40) as f32 / (1u64 << 24) as f32
         }
-    }
-
-    /// A wavy 8 × 8 m floor as a triangle mesh, and as a heightfield.
-    fn floors() -> (TriMesh, HeightField) {
-        let n = 9;
-        let height = |i: usize, j: usize| 0.3 * ((i as f32 * 0.9).sin() + (j as f32 * 0.7).cos());
-        let mesh = grid(n, 1.0, height);
-        let heights = rapier3d::parry::utils::Array2::from_fn(n, n, height);
-        let field = HeightField::new(heights, Vector::new(8.0, 1.0, 8.0));
-        (mesh, field)
-    }
-
-    /// A square grid of `n × n` vertices `spacing` apart about the origin,
-    /// at `height(i, j)`, two triangles a cell.
-    fn grid(n: usize, spacing: f32, height: impl Fn(usize, usize) -> f32) -> TriMesh {
-        let half = spacing * (n - 1) as f32 / 2.0;
-        let mut vertices = Vec::new();
-        let mut indices = Vec::new();
-        for i in 0..n {
-            for j in 0..n {
-                let (x, z) = (spacing * i as f32 - half, spacing * j as f32 - half);
-                vertices.push(Vector::new(x, height(i, j), z));
-            }
-        }
-        for i in 0..n - 1 {
-            for j in 0..n - 1 {
-                let k = (i * n + j) as u32;
-                indices.push([k, k + 1, k + n as u32]);
-                indices.push([k + 1, k + n as u32 + 1, k + n as u32]);
-            }
-        }
-        TriMesh::new(vertices, indices).expect("a valid mesh")
     }
 
     /// A rotation by up to 6 rad about an axis, from `next`'s numbers.

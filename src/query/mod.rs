@@ -34,9 +34,9 @@ mod pairs;
 mod primitives;
 mod sat;
 
-#[cfg(test)]
-pub(crate) use contact::cross_mesh;
 pub(crate) use contact::{Settle, StartContact, Witness, contact, contact_settled, start_contact};
+#[cfg(test)]
+pub(crate) use contact::{cross_mesh, floors, grid};
 pub use primitives::{PrimitiveToi, edge_edge_toi, vertex_face_toi};
 
 use crate::enclosure::{Arithmetic, TimeSpan};

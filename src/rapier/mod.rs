@@ -37,6 +37,7 @@ mod apply; // the plan written back to the world
 mod backoff; // where a clamp stands: where rapier's CCD would stop the body
 mod candidates; // what a fast collider may meet (broad phase, pair rules)
 mod clamp; // cut and carried motions
+mod mesh_planes; // a convex body within a still mesh's triangle planes
 mod moved; // a moved body's two poses and travel bounds
 mod push; // fast kinematic bodies carry what they meet
 mod rounds; // the first sweep and the re-sweeps after clamps

@@ -7,6 +7,7 @@ use super::backoff::{
     BACKOFF, HandBack, back_off, mesh_points_within, pair_approaches_within, pair_relative_travel,
     pair_travel, roundings, stop_before_gap, stop_when_deep,
 };
+use super::mesh_planes::stays_within_planes;
 use super::report::CcdReport;
 use super::search;
 use crate::InitialContact;
@@ -128,6 +129,12 @@ pub(super) fn touching_pair(
         if s2.as_halfspace().is_none() && mesh_points_within(moving, target, &normal, allowed) {
             return Ok(None);
         }
+    }
+    // A convex body on a still mesh or heightfield (a fast one: a slow
+    // one meets it as triangle targets, each convex): within every plane
+    // of the triangles it can reach.
+    if !convex && s1.is_convex() && stays_within_planes(moving, target, allowed) {
+        return Ok(None);
     }
     // A ball or capsule (roundings beyond the allowed depth) against a
     // convex shape: it is deeper exactly when its core comes closer than
