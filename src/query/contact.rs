@@ -15,8 +15,9 @@ use parry3d_f64::math::Vector as Vec64;
 use parry3d_f64::query::gjk::{
     self as gjk64, CsoPoint as Cso64, GJKResult as Gjk64Result, VoronoiSimplex as Simplex64,
 };
-use rapier3d::parry::bounding_volume::BoundingVolume;
+use rapier3d::parry::bounding_volume::{Aabb, BoundingVolume};
 use rapier3d::parry::math::{Pose, Real, Vector};
+use rapier3d::parry::partitioning::BvhNode;
 use rapier3d::parry::query::details::{self, ShapeCastOptions};
 use rapier3d::parry::query::gjk::{GJKResult, VoronoiSimplex};
 use rapier3d::parry::query::{
@@ -250,10 +251,19 @@ fn composite_contact(
 ) -> Option<Contact> {
     let settle = settle.filter(|s| s.allowed >= 0.0);
     let near = g2.compute_aabb(pos12).loosened(prediction);
+    let placed_box = PlacedBox::new(pos12, g2, prediction);
     let mut best: Option<(u32, Contact)> = None;
     let g2_polytope = sat::is_polytope(g2);
     let mut placed = None;
-    for part in g1.bvh().intersect_aabb(&near) {
+    // parry's own box test (`Bvh::intersect_aabb`), then, for a part,
+    // `g2`'s own box (a subtree's box is larger, and there the test cost
+    // more than it spared).
+    let query = BvhNode::leaf(near, 0);
+    let parts = g1.bvh().leaves(|node: &BvhNode| {
+        node.intersects(&query)
+            && (!node.is_leaf() || placed_box.is_none_or(|b| b.may_meet(&node.aabb())))
+    });
+    for part in parts {
         let best_dist = best.as_ref().map(|(_, b)| b.dist);
         if is_settled(best_dist, settle) {
             break;
@@ -281,6 +291,50 @@ fn composite_contact(
     })
 }
 
+/// `g2`'s own box placed in a composite's frame, loosened by a
+/// prediction: a part whose box is apart from it along one of its three
+/// axes is not within the prediction of `g2`. A box or slab turned in the
+/// composite's frame has an axis-aligned box far larger than itself (a
+/// wall beside a spinning mesh covers the whole mesh), which lets every
+/// part through to its own test.
+#[derive(Clone, Copy)]
+struct PlacedBox {
+    center: Vector,
+    axes: [Vector; 3],
+    /// Half extents, loosened by the prediction and the `f32` rounding.
+    half: Vector,
+}
+
+impl PlacedBox {
+    /// `None` for a shape without a finite box (a half-space).
+    fn new(pos12: &Pose, g2: &dyn Shape, prediction: Real) -> Option<PlacedBox> {
+        let local = g2.compute_local_aabb();
+        let center = *pos12 * local.center();
+        let half = local.half_extents();
+        // A few parts in 10⁶ of the coordinates: far more than the
+        // rounding of the projections below.
+        let rounding = 1.0e-5 * (1.0 + center.abs().max_element() + half.max_element());
+        let half = half + Vector::splat(prediction.max(0.0) + rounding);
+        (center.is_finite() && half.is_finite()).then(|| PlacedBox {
+            center,
+            axes: [Vector::X, Vector::Y, Vector::Z].map(|a| pos12.rotation * a),
+            half,
+        })
+    }
+
+    /// Whether `part` (a box in the composite's frame) may meet this box:
+    /// not apart along its axes.
+    fn may_meet(&self, part: &Aabb) -> bool {
+        let (mins, maxs) = (part.mins, part.maxs);
+        let (center, extent) = ((mins + maxs) * 0.5, (maxs - mins) * 0.5);
+        let offset = center - self.center;
+        self.axes
+            .iter()
+            .zip(self.half.to_array())
+            .all(|(a, h)| offset.dot(*a).abs() <= extent.dot(a.abs()) + h)
+    }
+}
+
 /// parry's heightfield contact (the deepest or closest of its triangles
 /// near `g2`, placed by `pos12` in the field's frame), with the pruning
 /// of [`composite_contact`].
@@ -294,12 +348,15 @@ fn heightfield_contact(
 ) -> Option<Contact> {
     let settle = settle.filter(|s| s.allowed >= 0.0);
     let near = g2.compute_aabb(pos12).loosened(prediction.max(0.0));
+    let placed_box = PlacedBox::new(pos12, g2, prediction);
     let mut best: Option<Contact> = None;
     let polytope = sat::is_polytope(g2);
     let mut placed = None;
     field.map_elements_in_local_aabb(&near, &mut |_, triangle| {
         let best_dist = best.as_ref().map(|b| b.dist);
-        if is_settled(best_dist, settle) {
+        if is_settled(best_dist, settle)
+            || placed_box.is_some_and(|b| !b.may_meet(&triangle.local_aabb()))
+        {
             return;
         }
         let reach = part_reach(best_dist, settle, polytope, prediction);
