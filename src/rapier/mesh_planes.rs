@@ -68,10 +68,16 @@ pub(super) fn stays_within_planes(
             }
         }
         TypedShape::HeightField(field) => {
-            field.map_elements_in_local_aabb(&local, &mut |_, t| triangles.push(*t));
-            if triangles.len() > MAX_TRIANGLES {
+            // Its cells under the box, two triangles each, counted before
+            // they are visited (a large field's would all be).
+            let extent = local.extents();
+            let across = |length: f32, cell: f32| (length / cell).ceil() + 1.0;
+            let cells =
+                across(extent.x, field.cell_width()) * across(extent.z, field.cell_height());
+            if cells.is_nan() || 2.0 * cells > MAX_TRIANGLES as f32 {
                 return false;
             }
+            field.map_elements_in_local_aabb(&local, &mut |_, t| triangles.push(*t));
         }
         _ => return false,
     }
