@@ -135,30 +135,11 @@ mod tests {
     use super::*;
     use crate::motion::Motion;
     use crate::query::{floors, grid};
+    use crate::rapier::testing::Numbers;
     use nalgebra::{Isometry3, Translation3, UnitQuaternion};
     use rapier3d::parry::math::Vector;
     use rapier3d::parry::query::contact;
     use rapier3d::parry::shape::{Ball, Capsule, Cuboid, Shape};
-
-    /// A small deterministic generator of test numbers (xorshift).
-    struct Numbers(u64);
-
-    impl Numbers {
-        fn next(&mut self, lo: f64, hi: f64) -> f64 {
-            self.0 ^= self.0 << 13;
-            self.0 ^= self.0 >> 7;
-            self.0 ^= self.0 << 17;
-            lo + (hi - lo) * (self.0 >> 11) as f64 / (1u64 << 53) as f64
-        }
-
-        fn vector(&mut self, size: f64) -> Vector3<f64> {
-            Vector3::new(
-                self.next(-size, size),
-                self.next(-size, size),
-                self.next(-size, size),
-            )
-        }
-    }
 
     fn moving_from(
         at: Vector3<f64>,

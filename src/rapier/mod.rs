@@ -45,6 +45,8 @@ mod search; // the stage's time-of-impact queries, their work counted
 mod select; // which bodies moved, which can tunnel
 mod substep; // a step cut into pieces at the first predicted impact
 mod sweep; // one body's earliest impact
+#[cfg(test)]
+mod testing; // what the stage's tests share
 mod touching; // pairs already touching at the start
 pub mod turns; // how many whole turns a step made
 mod world; // what the stage reads of the world

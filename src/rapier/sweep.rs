@@ -841,28 +841,9 @@ pub(crate) fn pushed_at_start(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::rapier::testing::Numbers;
     use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
     use rapier3d::parry::shape::{Ball, Capsule, Cuboid, Triangle};
-
-    /// A small deterministic generator of test numbers (xorshift).
-    struct Numbers(u64);
-
-    impl Numbers {
-        fn next(&mut self, lo: f64, hi: f64) -> f64 {
-            self.0 ^= self.0 << 13;
-            self.0 ^= self.0 >> 7;
-            self.0 ^= self.0 << 17;
-            lo + (hi - lo) * (self.0 >> 11) as f64 / (1u64 << 53) as f64
-        }
-
-        fn vector(&mut self, size: f64) -> Vector3<f64> {
-            Vector3::new(
-                self.next(-size, size),
-                self.next(-size, size),
-                self.next(-size, size),
-            )
-        }
-    }
 
     /// The sound search over the whole step finds no contact between
     /// the pair (case `case`, `gap` apart at the start), as a bound said.
