@@ -22,10 +22,10 @@ use crate::error::CcdError;
 use crate::motion::{Motion, Trajectory};
 use crate::query::{QueryOptions, ShapeMotion, Toi};
 use crate::solve::RootStatus;
-use nalgebra::{Point3, Vector3};
+use nalgebra::{Isometry3, Point3, Vector3};
 use rapier3d::parry::bounding_volume::BoundingVolume;
 use rapier3d::parry::math::Vector;
-use rapier3d::parry::shape::{Shape, SharedShape, TypedShape};
+use rapier3d::parry::shape::{Shape, SharedShape, SupportMap, TypedShape};
 
 /// Share of the skin a clamp at the true contact backs off (when rapier's
 /// rule does not say otherwise: a budget ran out, a pair touching at the
@@ -357,6 +357,27 @@ pub(crate) fn mesh_stays_apart(
     budget >= 0.0 && start.grows_within(moving, target, n, budget)
 }
 
+/// How far `points` (a mesh's vertices, in its frame, posed by `pose`)
+/// reach along `n` (unit) past the nearest support point of a target
+/// posed by `target_pose`, metres (negative: apart along `n`): the
+/// overlap of their projections on `n`, which bounds the depth of every
+/// triangle of the mesh against the target.
+pub(super) fn overlap_along(
+    points: &[Vector3<f64>],
+    pose: &Isometry3<f64>,
+    support: &dyn SupportMap,
+    target_pose: &Isometry3<f64>,
+    n: &Vector3<f64>,
+) -> f64 {
+    let reach = points
+        .iter()
+        .map(|v| n.dot(&(pose * Point3::from(*v)).coords))
+        .fold(f64::NEG_INFINITY, f64::max);
+    let toward = target_pose.rotation.inverse() * -n;
+    let low = support.local_support_point(glam_from_vec(&toward));
+    reach - n.dot(&(target_pose * point_from_glam(low)).coords)
+}
+
 /// A small moving mesh's overlap with a target along a direction at the
 /// step's start, and the points whose motion bounds its growth.
 struct MeshOverlap {
@@ -390,22 +411,15 @@ impl MeshOverlap {
             vec![Vector3::zeros()]
         };
         let (p0, q0) = (moving.motion.pose_at(0.0), target.motion.pose_at(0.0));
-        let reach = points
-            .iter()
-            .map(|v| n.dot(&(p0 * Point3::from(*v)).coords))
-            .fold(f64::NEG_INFINITY, f64::max);
-        let toward = q0.rotation.inverse() * -n;
-        let low = support.local_support_point(glam_from_vec(&toward));
-        let low = n.dot(&(q0 * point_from_glam(low)).coords);
         let scale = p0
             .translation
             .vector
             .amax()
             .max(q0.translation.vector.amax());
         Some(MeshOverlap {
+            overlap: overlap_along(&points, &p0, support, &q0, n),
             points,
             target_points,
-            overlap: reach - low,
             rounding: 1.0e-6 * (1.0 + scale),
         })
     }
