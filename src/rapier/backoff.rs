@@ -1285,13 +1285,9 @@ mod tests {
             Cuboid::new(Vector::new(0.05, 2.0, 2.0)),
         );
         let wall_motion = Motion::fixed(Isometry3::translation(1.0, 0.0, 0.0)).unwrap();
-        let (mut rng, mut stopped, mut within) = (0x2545_f491_4f6c_dd1du64, 0, 0);
-        let mut next = || {
-            rng ^= rng << 13;
-            rng ^= rng >> 7;
-            rng ^= rng << 17;
-            (rng >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
-        };
+        let (mut stopped, mut within) = (0, 0);
+        let mut rng = crate::rapier::testing::Numbers(0x2545_f491_4f6c_dd1d);
+        let mut next = || rng.next(-1.0, 1.0);
         for case in 0..300 {
             let turn = UnitQuaternion::from_scaled_axis(Vector3::new(next(), next(), next()) * 3.0);
             let start =

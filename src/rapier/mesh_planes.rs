@@ -135,31 +135,11 @@ mod tests {
     use super::*;
     use crate::motion::Motion;
     use crate::query::{floors, grid};
-    use crate::rapier::testing::Numbers;
+    use crate::rapier::testing::{Numbers, flying};
     use nalgebra::{Isometry3, Translation3, UnitQuaternion};
     use rapier3d::parry::math::Vector;
     use rapier3d::parry::query::contact;
     use rapier3d::parry::shape::{Ball, Capsule, Cuboid, Shape};
-
-    fn moving_from(
-        at: Vector3<f64>,
-        turn: Vector3<f64>,
-        v: Vector3<f64>,
-        w: Vector3<f64>,
-        dt: f64,
-    ) -> Motion {
-        Motion::from_velocities(
-            Isometry3::from_parts(
-                Translation3::from(at),
-                UnitQuaternion::from_scaled_axis(turn),
-            ),
-            Point3::from(at),
-            v,
-            w,
-            dt,
-        )
-        .unwrap()
-    }
 
     /// parry's depth of the pair at step fraction `tau` (0 when apart).
     fn depth_at(moving: &ShapeMotion, target: &ShapeMotion, tau: f64) -> f64 {
@@ -186,9 +166,9 @@ mod tests {
         let block = Cuboid::new(Vector::new(0.2, 0.2, 0.2));
         let slide = |down: f64| ShapeMotion {
             shape: &block,
-            motion: moving_from(
+            motion: flying(
                 Vector3::new(-2.0, 0.199, 0.3),
-                Vector3::zeros(),
+                UnitQuaternion::identity(),
                 Vector3::new(5.0, -down, 1.0),
                 Vector3::zeros(),
                 0.25,
@@ -252,7 +232,13 @@ mod tests {
             v.y *= 0.2;
             let moving = ShapeMotion {
                 shape,
-                motion: moving_from(at, turn, v, rng.vector(4.0), dt),
+                motion: flying(
+                    at,
+                    UnitQuaternion::from_scaled_axis(turn),
+                    v,
+                    rng.vector(4.0),
+                    dt,
+                ),
             };
             touching += 1;
             let allowed = depth_at(&moving, &target, 0.0).max(0.005) + rng.next(0.0, 0.02);

@@ -841,8 +841,8 @@ pub(crate) fn pushed_at_start(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::rapier::testing::Numbers;
-    use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
+    use crate::rapier::testing::{Numbers, flying};
+    use nalgebra::{Isometry3, UnitQuaternion, Vector3};
     use rapier3d::parry::shape::{Ball, Capsule, Cuboid, Triangle};
 
     /// The sound search over the whole step finds no contact between
@@ -891,17 +891,13 @@ mod tests {
         let (mut answered, mut apart) = (0, 0);
         for case in 0..1500 {
             let at = Vector3::new(rng.next(0.5, 1.6), rng.next(-0.5, 0.5), rng.next(-0.5, 0.5));
-            let motion = Motion::from_velocities(
-                Isometry3::from_parts(
-                    Translation3::from(at),
-                    UnitQuaternion::from_scaled_axis(rng.vector(3.0)),
-                ),
-                Point3::from(at),
+            let motion = flying(
+                at,
+                UnitQuaternion::from_scaled_axis(rng.vector(3.0)),
                 rng.vector(15.0),
                 rng.vector(150.0),
                 1.0 / 60.0,
-            )
-            .unwrap();
+            );
             let moving = ShapeMotion {
                 shape: &mesh,
                 motion,
@@ -952,14 +948,7 @@ mod tests {
         ];
         let motion = |rng: &mut Numbers, at: Vector3<f64>, speed: f64, spin: f64| {
             let turn = UnitQuaternion::from_scaled_axis(rng.vector(3.0));
-            Motion::from_velocities(
-                Isometry3::from_parts(Translation3::from(at), turn),
-                Point3::from(at),
-                rng.vector(speed),
-                rng.vector(spin),
-                1.0 / 60.0,
-            )
-            .unwrap()
+            flying(at, turn, rng.vector(speed), rng.vector(spin), 1.0 / 60.0)
         };
         let (mut answered, mut apart) = (0, 0);
         for case in 0..3000 {

@@ -1,6 +1,7 @@
 //! What the stage's tests share.
 
-use nalgebra::Vector3;
+use crate::motion::Motion;
+use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
 
 /// A small deterministic generator of test numbers (xorshift).
 pub(crate) struct Numbers(pub u64);
@@ -20,4 +21,24 @@ impl Numbers {
             self.next(-size, size),
         )
     }
+}
+
+/// A body at `at`, turned by `turn`, with its centre of mass at its
+/// origin, moving at `v` (m/s) and turning at `w` (rad/s) for `dt`
+/// seconds.
+pub(crate) fn flying(
+    at: Vector3<f64>,
+    turn: UnitQuaternion<f64>,
+    v: Vector3<f64>,
+    w: Vector3<f64>,
+    dt: f64,
+) -> Motion {
+    Motion::from_velocities(
+        Isometry3::from_parts(Translation3::from(at), turn),
+        Point3::from(at),
+        v,
+        w,
+        dt,
+    )
+    .expect("finite test motion")
 }

@@ -433,6 +433,7 @@ fn proved_within(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::rapier::testing::{Numbers, flying};
     use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
     use proptest::prelude::*;
     use rapier3d::parry::shape::{Ball, Capsule, Cuboid};
@@ -545,7 +546,7 @@ mod tests {
     /// band, or it would spare nothing.
     #[test]
     fn vertex_readings_agree_with_parrys_contact() {
-        let mut rng = crate::rapier::testing::Numbers(0x6a09_e667_f3bc_c909);
+        let mut rng = Numbers(0x6a09_e667_f3bc_c909);
         let mesh = crate::query::cross_mesh(0.85, 0.05, 0.02);
         let wall = Cuboid::new(Vector::new(0.1, 1.5, 1.5));
         let fixed = Motion::fixed(Isometry3::identity()).unwrap();
@@ -567,14 +568,7 @@ mod tests {
                 rng.next(-0.5, 0.5),
                 0.0,
             );
-            let motion = Motion::from_velocities(
-                Isometry3::from_parts(Translation3::from(at), turn),
-                Point3::from(at),
-                rng.vector(1.0),
-                rng.vector(3.0),
-                1.0 / 60.0,
-            )
-            .unwrap();
+            let motion = flying(at, turn, rng.vector(1.0), rng.vector(3.0), 1.0 / 60.0);
             let moving = ShapeMotion {
                 shape: &mesh,
                 motion,
