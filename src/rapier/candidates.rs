@@ -504,6 +504,17 @@ pub(crate) fn body_box(scene: &StageWorld, m: &Moved) -> Option<Aabb> {
         .reduce(|a, b| a.merged(&b))
 }
 
+/// A box holding the body's colliders at the start of its motion.
+pub(crate) fn start_box(scene: &StageWorld, m: &Moved) -> Option<Aabb> {
+    scene
+        .colliders_of(m.handle)
+        .filter_map(|(_, co)| {
+            let local = co.position_wrt_parent()?;
+            Some(co.shape().compute_aabb(&(m.start * *local)))
+        })
+        .reduce(|a, b| a.merged(&b))
+}
+
 /// Most triangles of a fixed mesh that a search takes one by one where it
 /// need not ([`mesh_triangles`]: a fast shape's sweep, a landing ball's
 /// deep stop); past it the search takes the whole mesh, whose tree prunes

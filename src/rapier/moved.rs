@@ -64,6 +64,40 @@ pub(crate) fn travel_bound(shift: f64, extent: f64, angle: f64) -> f64 {
     (shift + extent * angle.min(2.0)) * (1.0 + 1.0e-4) + 1.0e-6
 }
 
+/// Bound on how far any point of body `a` moves relative to any point of
+/// body `b` during the step (`ra`, `rb` their rigid bodies), metres, each
+/// on the motion the stage builds from its record (`Motion::from_poses`
+/// with its acceleration): the centres of mass's relative shift and the
+/// acceleration terms' difference, plus each body's turning chord (its
+/// reach from the centre of mass, rapier's `max_extent`, times its angle,
+/// at most two reaches), padded for the `f32` poses. Two bodies moving
+/// together (a paddle and the boxes it carries) get a small bound however
+/// fast they go.
+pub(crate) fn relative_travel(
+    a: &Moved,
+    ra: &RigidBody,
+    b: &Moved,
+    rb: &RigidBody,
+    dt: f64,
+) -> f64 {
+    let shift = |m: &Moved, r: &RigidBody| {
+        let com = r.local_center_of_mass();
+        (m.end * com - m.start * com).as_dvec3()
+    };
+    let linear = (shift(a, ra) - shift(b, rb)).length()
+        + 0.5 * (a.accel - b.accel).as_dvec3().length() * dt * dt;
+    let turn = |m: &Moved, r: &RigidBody| {
+        let angle = angle_bound(angle_short(&m.start, &m.end), m.angvel.length() as f64 * dt);
+        r.mass_properties().max_extent() as f64 * angle.min(2.0)
+    };
+    // `f32` products and differences of coordinates this large.
+    let scale = [a.start, a.end, b.start, b.end]
+        .iter()
+        .map(|p| p.translation.abs().max_element())
+        .fold(0.0f32, f32::max) as f64;
+    (linear + turn(a, ra) + turn(b, rb)) * (1.0 + 1.0e-4) + 1.0e-5 + 1.0e-6 * scale
+}
+
 /// Bound on how far any point of `rb` moves on the shortest motion from
 /// `start` to `end`, metres (the `travel` of a motion rebuilt by the stage).
 pub(crate) fn travel_between(rb: &RigidBody, start: &Pose, end: &Pose) -> f64 {

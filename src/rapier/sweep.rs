@@ -571,7 +571,7 @@ fn box_axis(a: &Aabb, b: &Aabb) -> Vector {
 /// A lower bound of the distance between anything inside two boxes,
 /// metres (0 when they meet), less the rounding of `f32` boxes (a few
 /// parts in 10⁷ of the coordinates).
-fn box_gap(a: &Aabb, b: &Aabb) -> f64 {
+pub(crate) fn box_gap(a: &Aabb, b: &Aabb) -> f64 {
     let below = (b.mins - a.maxs).max(Vector::ZERO);
     let above = (a.mins - b.maxs).max(Vector::ZERO);
     ((below + above).length() as f64 - box_rounding(a, b)).max(0.0)
