@@ -322,20 +322,33 @@ impl Motion {
         let displacement = linvel * dt;
         check_vector("linear velocity × dt", &displacement)?;
         check_vector("angular velocity × dt", &rotation)?;
+        Ok(Motion::assemble(&start, center, displacement, rotation, dt))
+    }
+
+    /// The motion from checked parts: the frame starts at `start`, its
+    /// centre at `center`, which moves by `displacement` and turns by
+    /// `rotation` (radians) over `dt` seconds.
+    fn assemble(
+        start: &Isometry3<f64>,
+        center: Point3<f64>,
+        displacement: Vector3<f64>,
+        rotation: Vector3<f64>,
+        dt: f64,
+    ) -> Motion {
         let start_rotation = UnitQuaternion::new_normalize(start.rotation.into_inner());
-        let mut motion = Motion {
+        let start_matrix = *start_rotation.to_rotation_matrix().matrix();
+        let arm = start.translation.vector - center.coords;
+        Motion {
             center,
-            arm: start.translation.vector - center.coords,
+            arm,
             start_rotation,
-            start_matrix: *start_rotation.to_rotation_matrix().matrix(),
+            start_matrix,
             displacement,
             bend: Vector3::zeros(),
             rotation,
             dt,
-            spin: None,
-        };
-        motion.spin = Spin::new(&rotation, &motion.start_matrix, &motion.arm);
-        Ok(motion)
+            spin: Spin::new(&rotation, &start_matrix, &arm),
+        }
     }
 
     /// The same motion with a constant linear acceleration `linacc` (m/s²)
@@ -379,14 +392,9 @@ impl Motion {
         let q0 = UnitQuaternion::new_normalize(start.rotation.into_inner());
         let q1 = UnitQuaternion::new_normalize(end.rotation.into_inner());
         let theta = whole_turns(&(q1 * q0.inverse()).scaled_axis(), &(angvel_hint * dt));
-        // No spin from the velocities: the exact rotation vector replaces it.
-        let mut motion =
-            Motion::from_velocities(start, c0, Vector3::zeros(), Vector3::zeros(), dt)?;
+        check_vector("centre of mass", &c0.coords)?;
         check_vector("rotation over the step", &theta)?;
-        motion.rotation = theta;
-        motion.spin = Spin::new(&theta, &motion.start_matrix, &motion.arm);
-        motion.displacement = c1 - c0;
-        Ok(motion)
+        Ok(Motion::assemble(&start, c0, c1 - c0, theta, dt))
     }
 
     /// The motion of a frame fixed to this one at `local` (the second
