@@ -241,7 +241,10 @@ fn may_meet(scene: &StageWorld, body: &Moved, member: &Moved, reach: f64, dt: f6
     ) else {
         return true;
     };
-    sweep::box_gap(&a, &b) <= relative_travel(body, ra, member, rb, dt) + reach + 1.0e-3
+    let bound = relative_travel(body, ra, member, rb, dt) + reach + 1.0e-3;
+    let gap = sweep::box_gap(&a, &b);
+    // A gap or bound that came out NaN proves nothing.
+    gap <= bound || gap.is_nan() || bound.is_nan()
 }
 
 #[cfg(test)]
@@ -379,6 +382,17 @@ mod tests {
             }
         }
         assert!(spared >= 180, "only {spared} of 600 pairs spared");
+    }
+
+    /// A record whose bound comes out NaN (a non-finite end pose) proves
+    /// nothing: the bodies may meet, however far apart they start.
+    #[test]
+    fn a_bound_that_is_nan_proves_nothing() {
+        let mut n = Numbers(11);
+        let mut c = pair(&mut n, 1.9, 0.0, 0.0, 0.0, 1.0 / 60.0);
+        assert!(!c.may_meet(2.1e-3), "far apart and still");
+        c.records[1].end.translation.x = f32::NAN;
+        assert!(c.may_meet(2.1e-3));
     }
 
     /// Boxes a paddle carries in a row, a box apart, moving together at
