@@ -361,11 +361,12 @@ mod tests {
     }
 
     /// Where `may_meet` answers that two bodies cannot meet, the sound
-    /// search finds them nowhere within the reach over the step: boxes
+    /// search finds them nowhere within the reach over the step: bodies
     /// carried together, drifting apart or together, turning up to two
-    /// radians and spun by their hints, started from touching to two
-    /// metres apart. It answers so for a good share of them, or the
-    /// sweeps it spares would be none.
+    /// radians and spun by their hints, their origins 0.4 to 1.6 m apart
+    /// (overlapping to a metre apart). It answers so for a good share of
+    /// them, or the sweeps it spares would be none; with the turning
+    /// chords left out of the bound it lets pairs that meet through.
     #[test]
     fn bodies_that_cannot_meet_do_not() {
         let mut n = Numbers(0x005e_ed0f_9a5e);
@@ -395,8 +396,8 @@ mod tests {
         assert!(c.may_meet(2.1e-3));
     }
 
-    /// Boxes a paddle carries in a row, a box apart, moving together at
-    /// 40 m/s: each cannot meet the box two ahead of it, however far
+    /// Two bodies a paddle carries in a row, apart at the start and
+    /// moving together at 40 m/s without turning, cannot meet, however far
     /// they go (the pushes of such a row were O(n²) sweeps a step).
     #[test]
     fn boxes_carried_together_cannot_meet() {
