@@ -2,8 +2,8 @@
 //! crosses before it ([`earliest`], [`first_crossing`]).
 
 use super::backoff::{
-    HandBack, Stop, mesh_stays_apart, pair_approaches_within, pair_relative_travel, pair_travel,
-    stop_after_contact, stop_when_deep,
+    DeepStop, HandBack, Stop, deep_stop_at_once, mesh_stays_apart, pair_approaches_within,
+    pair_relative_travel, pair_travel, stop_after_contact, stop_when_deep,
 };
 use super::candidates::{
     Candidate, FEW_PIECES, Interaction, MAX_PIECES, MeshPiece, MovingBoxes, gather, gather_listed,
@@ -466,6 +466,23 @@ fn earliest_piece(
     // stops after its contact, and another pair may stop before that.
     let mut until = opts.time_range.hi;
     while !alive.is_empty() && until > lo {
+        // A lone ball or capsule that rapier stops a little deep after its
+        // contact with a mesh: one search for that depth, not the
+        // contact's and then the depth's (see `deep_stop_at_once`).
+        if let [j] = alive[..] {
+            match deep_stop_at_once(moving, &targets[j], lo, until, rules, opts, report)? {
+                Some(DeepStop::Never) => break,
+                Some(DeepStop::At(toi)) => {
+                    keep(Earliest {
+                        toi,
+                        target: j,
+                        touching: false,
+                    });
+                    break;
+                }
+                Some(DeepStop::NeedsContact) | None => {}
+            }
+        }
         let contact = QueryOptions {
             skin: 0.0,
             time_range: TimeSpan::new(lo, until),
