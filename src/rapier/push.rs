@@ -180,10 +180,12 @@ fn sweep_candidates(
             continue;
         }
         let body = &current[c.i];
+        // Its start box, once for all the members it is held against.
+        let at_start = start_box(scene, body);
         if !set.iter().any(|h| {
             motions
                 .body(*h)
-                .is_none_or(|m| may_meet(scene, body, m, reach, q.dt))
+                .is_none_or(|m| may_meet(scene, body, at_start.as_ref(), m, reach, q.dt))
         }) {
             continue;
         }
@@ -223,8 +225,8 @@ fn sweep_candidates(
     }
 }
 
-/// Whether `body` may come within `reach` of front member `member` during
-/// the step: their start boxes are apart by no more than the two can move
+/// Whether `body` (its start box `at_start`) may come within `reach` of
+/// front member `member` during the step: their start boxes are apart by no more than the two can move
 /// relative to each other ([`relative_travel`]), with a millimetre to
 /// spare for parry's `f32` gaps. A body farther than that can neither
 /// touch the member at the start nor meet it later, so its sweep against
@@ -232,9 +234,16 @@ fn sweep_candidates(
 /// carried box joins the front, and every box still ahead, moving along
 /// with it, was swept against it: O(n²) sweeps a step, most of them this
 /// far apart.
-fn may_meet(scene: &StageWorld, body: &Moved, member: &Moved, reach: f64, dt: f64) -> bool {
+fn may_meet(
+    scene: &StageWorld,
+    body: &Moved,
+    at_start: Option<&Aabb>,
+    member: &Moved,
+    reach: f64,
+    dt: f64,
+) -> bool {
     let (Some(a), Some(b), Some(ra), Some(rb)) = (
-        start_box(scene, body),
+        at_start,
         start_box(scene, member),
         scene.bodies.get(body.handle),
         scene.bodies.get(member.handle),
@@ -242,7 +251,7 @@ fn may_meet(scene: &StageWorld, body: &Moved, member: &Moved, reach: f64, dt: f6
         return true;
     };
     let bound = relative_travel(body, ra, member, rb, dt) + reach + 1.0e-3;
-    let gap = sweep::box_gap(&a, &b);
+    let gap = sweep::box_gap(a, &b);
     // A gap or bound that came out NaN proves nothing.
     gap <= bound || gap.is_nan() || bound.is_nan()
 }
@@ -332,7 +341,16 @@ mod tests {
                 config: &config,
                 slop: 0.0,
             };
-            may_meet(&scene, &self.records[0], &self.records[1], reach, self.dt)
+            let body = &self.records[0];
+            let at_start = start_box(&scene, body);
+            may_meet(
+                &scene,
+                body,
+                at_start.as_ref(),
+                &self.records[1],
+                reach,
+                self.dt,
+            )
         }
 
         /// Whether any collider of the first body comes within `reach` of

@@ -858,7 +858,7 @@ pub(crate) fn pushed_at_start(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::rapier::testing::{Numbers, flying};
+    use crate::rapier::testing::{Numbers, flying, propeller_and_wall};
     use nalgebra::{Isometry3, UnitQuaternion, Vector3};
     use rapier3d::parry::shape::{Ball, Capsule, Cuboid, Triangle};
 
@@ -902,8 +902,7 @@ mod tests {
     #[test]
     fn mesh_stays_apart_agrees_with_the_search() {
         let mut rng = Numbers(0x2545_f491_4f6c_dd1d);
-        let mesh = crate::query::cross_mesh(0.85, 0.05, 0.02);
-        let wall = Cuboid::new(Vector::new(0.1, 1.5, 1.5));
+        let (mesh, wall) = propeller_and_wall();
         let fixed = Motion::fixed(Isometry3::identity()).unwrap();
         let (mut answered, mut apart) = (0, 0);
         for case in 0..1500 {

@@ -2,6 +2,8 @@
 
 use crate::motion::Motion;
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
+use rapier3d::parry::shape::{Cuboid, TriMesh};
+use rapier3d::prelude::Vector;
 
 /// A small deterministic generator of test numbers (xorshift).
 pub(crate) struct Numbers(pub u64);
@@ -41,4 +43,13 @@ pub(crate) fn flying(
         dt,
     )
     .expect("finite test motion")
+}
+
+/// A small mesh propeller (two crossed 1.7 m blades) and the fixed wall
+/// box the mesh tests hold it against.
+pub(crate) fn propeller_and_wall() -> (TriMesh, Cuboid) {
+    (
+        crate::query::cross_mesh(0.85, 0.05, 0.02),
+        Cuboid::new(Vector::new(0.1, 1.5, 1.5)),
+    )
 }

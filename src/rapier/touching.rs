@@ -433,7 +433,7 @@ fn proved_within(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::rapier::testing::{Numbers, flying};
+    use crate::rapier::testing::{Numbers, flying, propeller_and_wall};
     use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
     use proptest::prelude::*;
     use rapier3d::parry::shape::{Ball, Capsule, Cuboid};
@@ -547,8 +547,7 @@ mod tests {
     #[test]
     fn vertex_readings_agree_with_parrys_contact() {
         let mut rng = Numbers(0x6a09_e667_f3bc_c909);
-        let mesh = crate::query::cross_mesh(0.85, 0.05, 0.02);
-        let wall = Cuboid::new(Vector::new(0.1, 1.5, 1.5));
+        let (mesh, wall) = propeller_and_wall();
         let fixed = Motion::fixed(Isometry3::identity()).unwrap();
         let target = ShapeMotion {
             shape: &wall,
