@@ -159,8 +159,14 @@ impl Spin {
     /// distances' own precision) and are treated as none.
     const NEGLIGIBLE: f64 = 1.0e-150;
 
+    /// Whether the rotation vector `theta` turns the frame at all (the
+    /// constructors let no NaN through).
+    fn turns(theta: &Vector3<f64>) -> bool {
+        theta.norm() > Spin::NEGLIGIBLE
+    }
+
     fn new(theta: &Vector3<f64>, start: &Matrix3<f64>, arm: &Vector3<f64>) -> Option<Spin> {
-        if theta.norm() <= Spin::NEGLIGIBLE {
+        if !Spin::turns(theta) {
             return None;
         }
         let (angle, k) = Spin::unit_axis(theta)?;
@@ -238,9 +244,38 @@ impl Spin {
     }
 }
 
+/// A prepared turn with what it was made from: the rotation vector, the
+/// start matrix and the arm.
+type TurnEntry = (Vector3<f64>, Matrix3<f64>, Vector3<f64>, Spin);
+
+/// Whether two lists of numbers are the same bit for bit (`-0.0` and `0.0`
+/// are not: the products keep the sign).
+fn same_bits(a: &[f64], b: &[f64]) -> bool {
+    a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits())
+}
+
+/// The turns prepared last ([`Motion::prepare_with`]), by what they were
+/// made from: a step's searches enclose the same motion again and again
+/// (a hit, its stop, a touching pair's proof), each in a query of its own.
+/// A handful, looked up by comparing what they were made from: next to
+/// making a turn's products (about 0.7 k instructions) that costs little.
+#[derive(Debug, Default)]
+pub(crate) struct TurnMemo {
+    entries: Vec<TurnEntry>,
+    /// The entry the next new turn replaces, once all are taken.
+    next: usize,
+}
+
+impl TurnMemo {
+    const SIZE: usize = 4;
+}
+
 /// A rigid frame's motion over one step: a polynomial path of the centre of
 /// mass and a constant angular velocity about it (see the module docs).
-#[derive(Clone, Copy, Debug, PartialEq)]
+///
+/// Two motions are equal when their definitions are: whether the turn's
+/// products are prepared yet ([`Motion::prepare`]) does not count.
+#[derive(Clone, Copy, Debug)]
 pub struct Motion {
     /// Rotation centre (body centre of mass) at `τ = 0`, world, metres.
     center: Point3<f64>,
@@ -258,7 +293,28 @@ pub struct Motion {
     rotation: Vector3<f64>,
     /// The step length, seconds (0 for a fixed frame).
     dt: f64,
+    /// The frame turns: `|rotation|` is above `Spin::NEGLIGIBLE`.
+    turning: bool,
+    /// The turn's products, once prepared ([`Motion::prepare`]); `None`
+    /// before, and for a frame that does not turn. Made on first need:
+    /// most motions a step builds are only boxed and bounded, never
+    /// enclosed, and preparing one costs more than building the rest.
     spin: Option<Spin>,
+}
+
+impl PartialEq for Motion {
+    fn eq(&self, other: &Motion) -> bool {
+        // `spin` follows from the other fields.
+        self.center == other.center
+            && self.arm == other.arm
+            && self.start_rotation == other.start_rotation
+            && self.start_matrix == other.start_matrix
+            && self.displacement == other.displacement
+            && self.bend == other.bend
+            && self.rotation == other.rotation
+            && self.dt == other.dt
+            && self.turning == other.turning
+    }
 }
 
 fn check_vector(what: &'static str, v: &Vector3<f64>) -> Result<(), CcdError> {
@@ -347,8 +403,61 @@ impl Motion {
             bend: Vector3::zeros(),
             rotation,
             dt,
-            spin: Spin::new(&rotation, &start_matrix, &arm),
+            turning: Spin::turns(&rotation),
+            spin: None,
         }
+    }
+
+    /// Prepares the turn's products that every enclosed pose reads
+    /// ([`Trajectory::pose`] makes them anew on each call otherwise). A
+    /// query prepares the motions it encloses; preparing twice does
+    /// nothing.
+    pub fn prepare(&mut self) {
+        if self.turning && self.spin.is_none() {
+            self.spin = Spin::new(&self.rotation, &self.start_matrix, &self.arm);
+        }
+    }
+
+    /// [`prepare`](Motion::prepare), taking the products from `memo` when
+    /// a motion with the same turn was prepared lately, and leaving them
+    /// there.
+    pub(crate) fn prepare_with(&mut self, memo: &mut TurnMemo) {
+        if !self.turning || self.spin.is_some() {
+            return;
+        }
+        let same = |(rotation, start, arm, _): &&TurnEntry| {
+            same_bits(rotation.as_slice(), self.rotation.as_slice())
+                && same_bits(arm.as_slice(), self.arm.as_slice())
+                && same_bits(start.as_slice(), self.start_matrix.as_slice())
+        };
+        if let Some((.., spin)) = memo.entries.iter().find(same) {
+            self.spin = Some(*spin);
+            return;
+        }
+        self.prepare();
+        if let Some(spin) = self.spin {
+            let entry = (self.rotation, self.start_matrix, self.arm, spin);
+            if memo.entries.len() < TurnMemo::SIZE {
+                memo.entries.push(entry);
+            } else {
+                memo.entries[memo.next] = entry;
+            }
+            memo.next = (memo.next + 1) % TurnMemo::SIZE;
+        }
+    }
+
+    /// The turn's products for an enclosed pose over `span`: `None` where
+    /// the frame has not turned (it does not turn, or `span` is the start).
+    /// Read in place when prepared, else made into `fresh`.
+    fn spin_over<'a>(&'a self, span: TimeSpan, fresh: &'a mut Option<Spin>) -> Option<&'a Spin> {
+        if !self.turning || at_start(span) {
+            return None;
+        }
+        if self.spin.is_some() {
+            return self.spin.as_ref();
+        }
+        *fresh = Spin::new(&self.rotation, &self.start_matrix, &self.arm);
+        fresh.as_ref()
     }
 
     /// The same motion with a constant linear acceleration `linacc` (m/s²)
@@ -412,8 +521,12 @@ impl Motion {
         motion.start_rotation =
             UnitQuaternion::new_normalize((self.start_rotation * local.rotation).into_inner());
         motion.start_matrix = *motion.start_rotation.to_rotation_matrix().matrix();
-        // The prepared rotation products depend on the start and the arm.
-        motion.spin = Spin::new(&motion.rotation, &motion.start_matrix, &motion.arm);
+        // The prepared rotation products depend on the start and the arm:
+        // made anew if this motion's were.
+        motion.spin = None;
+        if self.spin.is_some() {
+            motion.prepare();
+        }
         motion
     }
 
@@ -462,7 +575,14 @@ impl Motion {
     /// True when the frame turns during the step (a turn below any length
     /// scale, see `Spin::NEGLIGIBLE`, counts as none).
     pub fn turns(&self) -> bool {
-        self.spin.is_some()
+        self.turning
+    }
+
+    /// True when turning moves the frame's origin: the frame turns and
+    /// its origin is not its rotation centre. (Only then does an enclosed
+    /// origin read the turn's products.)
+    pub(crate) fn origin_turns(&self) -> bool {
+        self.turning && self.arm != Vector3::zeros()
     }
 
     /// True when the frame neither moves nor turns.
@@ -813,7 +933,8 @@ impl Trajectory for Motion {
     fn pose<E: Enclosure>(&self, span: TimeSpan) -> Pose<E> {
         let tau = E::time(span);
         let center = self.center_at(tau);
-        let Some(spin) = self.spin.as_ref().filter(|_| !at_start(span)) else {
+        let mut fresh = None;
+        let Some(spin) = self.spin_over(span, &mut fresh) else {
             return Pose {
                 rotation: self.start_matrix.map(E::constant),
                 translation: center + self.arm.map(E::constant),
@@ -829,9 +950,16 @@ impl Trajectory for Motion {
     fn origin<E: Enclosure>(&self, span: TimeSpan) -> Vector3<E> {
         let tau = E::time(span);
         let center = self.center_at(tau);
-        match self.spin.as_ref().filter(|_| !at_start(span)) {
+        if !self.turning || at_start(span) {
+            return center + self.arm.map(E::constant);
+        }
+        if self.arm == Vector3::zeros() {
+            // The origin is the rotation centre: turning moves it not.
+            return center;
+        }
+        let mut fresh = None;
+        match self.spin_over(span, &mut fresh) {
             None => center + self.arm.map(E::constant),
-            Some(_) if self.arm == Vector3::zeros() => center,
             Some(spin) => {
                 let (s, c, mag) = spin.angle_terms(tau);
                 center + spin.arm(&self.arm, s, c, mag)
@@ -841,7 +969,7 @@ impl Trajectory for Motion {
 
     fn pose_at(&self, tau: f64) -> Isometry3<f64> {
         let center = self.center.coords + self.displacement * tau + self.bend * (tau * tau);
-        if self.spin.is_none() {
+        if !self.turning {
             // No turn (or one below any length scale, see `Spin::NEGLIGIBLE`).
             let origin = center + self.arm;
             return Isometry3::from_parts(Translation3::from(origin), self.start_rotation);
@@ -1071,6 +1199,107 @@ mod tests {
             for (mid, iv) in spin.arm_k2.iter().zip(ak2.iter()) {
                 prop_assert!(holds(*mid, spin.arm_err, iv), "K²·arm {mid} ± {} vs {iv:?}", spin.arm_err);
             }
+        }
+    }
+
+    /// A turn prepared on first need encloses bit for bit what one
+    /// prepared at once does (the stage's motions are prepared by the
+    /// query that encloses them; a user's may never be), over the whole
+    /// step, a node, and the start; a frame carried by a turning one too,
+    /// and one whose origin is its rotation centre (a ball's).
+    #[test]
+    fn a_turn_prepared_late_encloses_what_one_prepared_first_does() {
+        use crate::enclosure::Affine;
+        let spans = [
+            TimeSpan::STEP,
+            TimeSpan::new(0.3, 0.45),
+            TimeSpan::new(0.0, 0.0),
+        ];
+        let local = Isometry3::new(Vector3::new(0.2, -0.1, 0.4), Vector3::new(0.3, 0.0, -0.2));
+        for (center, angvel) in [
+            ([0.3, -0.2, 0.1], [4.0, -30.0, 12.0]),
+            ([0.0, 0.0, 0.0], [0.0, 700.0, 0.0]),
+            ([0.5, 0.5, 0.5], [0.0, 0.0, 0.0]),
+        ] {
+            let lazy = sampled_motion(
+                [1.0, 2.0, 3.0],
+                [0.1, 0.2, 0.3],
+                center,
+                [5.0, 0.0, -2.0],
+                angvel,
+                [0.0; 3],
+            );
+            let mut prepared = lazy;
+            prepared.prepare();
+            assert!(lazy.spin.is_none(), "built unprepared");
+            assert_eq!(
+                prepared.spin.is_some(),
+                lazy.turns(),
+                "prepared when it turns"
+            );
+            assert_eq!(lazy, prepared, "preparing does not change the motion");
+            for (lazy, prepared) in [
+                (lazy, prepared),
+                (
+                    lazy.with_local_frame(&local),
+                    prepared.with_local_frame(&local),
+                ),
+            ] {
+                for span in spans {
+                    assert_eq!(
+                        lazy.pose::<Affine>(span),
+                        prepared.pose::<Affine>(span),
+                        "{span:?}"
+                    );
+                    assert_eq!(
+                        lazy.origin::<Affine>(span),
+                        prepared.origin::<Affine>(span),
+                        "{span:?}"
+                    );
+                }
+            }
+        }
+    }
+
+    /// Turns prepared through a memo are each their own: motions that
+    /// share the rotation but not the start or the arm get their own
+    /// products, a turn pushed out of the memo is made anew, and one still
+    /// in it is read back.
+    #[test]
+    fn the_memo_gives_each_turn_its_own_products() {
+        let angvel = [3.0, -40.0, 9.0];
+        let motions: Vec<Motion> = (0..2 * TurnMemo::SIZE + 2)
+            .map(|k| {
+                let k = k as f64;
+                // Even ones differ in their start, odd ones in their arm.
+                let (turn, center) = if k % 2.0 == 0.0 {
+                    ([0.1 * k, 0.2, 0.3], [0.3, -0.2, 0.1])
+                } else {
+                    ([0.0, 0.2, 0.3], [0.3 + 0.1 * k, -0.2, 0.1])
+                };
+                sampled_motion(
+                    [1.0, 2.0, 3.0],
+                    turn,
+                    center,
+                    [5.0, 0.0, -2.0],
+                    angvel,
+                    [0.0; 3],
+                )
+            })
+            .collect();
+        let mut memo = TurnMemo::default();
+        // Each in turn, then all again (all pushed out by then), then the
+        // last one (still in).
+        let order = (0..motions.len())
+            .chain(0..motions.len())
+            .chain([motions.len() - 1]);
+        for i in order {
+            let mut through_memo = motions[i];
+            through_memo.prepare_with(&mut memo);
+            let mut direct = motions[i];
+            direct.prepare();
+            assert!(direct.spin.is_some());
+            assert_eq!(through_memo.spin, direct.spin, "motion {i}");
         }
     }
 }

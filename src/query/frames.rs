@@ -3,10 +3,12 @@
 //! local pose). Each frame's pose is enclosed once per node, on first use,
 //! for every pair that reads it; so are the relative poses composite pairs
 //! read, and each frame keeps its last exact pose (at a node's middle).
+//! A frame's motion has its turn prepared ([`Motion::prepare`]) on its
+//! first enclosed pose.
 
 use crate::enclosure::{Enclosure, TimeSpan};
 use crate::gap::KeptPose;
-use crate::motion::{Motion, Pose, Trajectory, column, row};
+use crate::motion::{Motion, Pose, Trajectory, TurnMemo, column, row};
 use nalgebra::{Isometry3, Matrix3, Vector3};
 use std::collections::HashMap;
 
@@ -41,11 +43,23 @@ pub(super) struct Frames<E: Enclosure> {
     relative: Vec<(u32, u32, Pose<E>)>,
     /// Per frame: its last exact pose (`Side::pose_at`).
     kept: Vec<KeptPose>,
+    /// Turns prepared by earlier queries (see [`FrameBuffers`]).
+    turns: TurnMemo,
+}
+
+/// What a query context keeps of its frames between searches: the frame
+/// list's buffer and the turns prepared lately.
+#[derive(Debug, Default)]
+pub(super) struct FrameBuffers {
+    pub defs: Vec<FrameDef>,
+    pub turns: TurnMemo,
 }
 
 impl<E: Enclosure> Frames<E> {
-    pub fn new(defs: Vec<FrameDef>, rotation_read: Vec<bool>) -> Frames<E> {
+    pub fn new(buffers: &mut FrameBuffers, rotation_read: Vec<bool>) -> Frames<E> {
+        let defs = std::mem::take(&mut buffers.defs);
         Frames {
+            turns: std::mem::take(&mut buffers.turns),
             poses: vec![None; defs.len()],
             kept: (0..defs.len()).map(|_| KeptPose::default()).collect(),
             defs,
@@ -55,9 +69,10 @@ impl<E: Enclosure> Frames<E> {
         }
     }
 
-    /// The frames' definitions, for their buffer to be used again.
-    pub fn into_defs(self) -> Vec<FrameDef> {
-        self.defs
+    /// Gives back what the query context keeps.
+    pub fn into_buffers(self, buffers: &mut FrameBuffers) {
+        buffers.defs = self.defs;
+        buffers.turns = self.turns;
     }
 
     pub fn motion(&self, index: u32) -> &Motion {
@@ -89,12 +104,19 @@ impl<E: Enclosure> Frames<E> {
         let pose = match self.defs[i].parent {
             None if !self.rotation_read[i] => {
                 // Only the origin is read: the rotation stays at its start.
-                let motion = &self.defs[i].motion;
+                let motion = &mut self.defs[i].motion;
+                if motion.origin_turns() {
+                    motion.prepare_with(&mut self.turns);
+                }
                 let mut pose = Pose::constant(&motion.start_rotation_matrix(), &Vector3::zeros());
                 pose.translation = motion.origin(span);
                 pose
             }
-            None => self.defs[i].motion.pose(span),
+            None => {
+                let motion = &mut self.defs[i].motion;
+                motion.prepare_with(&mut self.turns);
+                motion.pose(span)
+            }
             Some((parent, rotation, origin)) => {
                 let p = self.pose(parent, span);
                 Pose {

@@ -46,7 +46,7 @@ use crate::gap::composite::{self, PairSide};
 use crate::motion::Motion;
 use crate::solve::{InitialContact, RootStatus, SolveOptions, SolveOutcome, SolveStats, Solver};
 use balls::Balls;
-use frames::FrameDef;
+use frames::{FrameBuffers, FrameDef};
 use nalgebra::{Point3, Vector3};
 use pairs::{CompositePair, PairContent, PairEntry, Search};
 use rapier3d::parry::shape::Shape;
@@ -200,9 +200,9 @@ pub fn is_supported(shape1: &dyn Shape, shape2: &dyn Shape) -> bool {
 #[derive(Debug, Default)]
 pub struct Query {
     solver: Solver,
-    /// The search's frames, kept for their buffer (given to each search
+    /// The search's frames, kept for their buffers (given to each search
     /// and taken back after it).
-    frames: Vec<FrameDef>,
+    frames: FrameBuffers,
     /// What the last search spent, hit or miss.
     spent: SolveStats,
 }
@@ -329,9 +329,13 @@ impl Query {
         solve_options: &SolveOptions,
     ) -> Result<(SolveOutcome, Option<(usize, usize)>), CcdError> {
         let frames = &mut self.frames;
-        frames.clear();
-        frames.extend(moving.iter().map(|m| FrameDef::root(m.motion)));
-        frames.extend(targets.iter().map(|t| FrameDef::root(t.motion)));
+        frames.defs.clear();
+        frames
+            .defs
+            .extend(moving.iter().map(|m| FrameDef::root(m.motion)));
+        frames
+            .defs
+            .extend(targets.iter().map(|t| FrameDef::root(t.motion)));
         options.arithmetic.dispatch(Search {
             solver: &mut self.solver,
             frames,

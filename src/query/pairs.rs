@@ -1,7 +1,7 @@
 //! The pairs of one query as the solver sees them.
 
 use super::balls::Balls;
-use super::frames::{FrameDef, Frames};
+use super::frames::{FrameBuffers, Frames};
 use crate::convert::glam_from_vec;
 use crate::enclosure::Interval;
 use crate::enclosure::{Enclosure, InArithmetic, TimeSpan};
@@ -18,9 +18,9 @@ use rapier3d::parry::shape::Shape;
 /// bad parameters) is reported as its error after the search.
 pub(super) struct Search<'a, 's> {
     pub solver: &'a mut Solver,
-    /// Taken for the search and given back after it (the caller keeps
-    /// the buffer).
-    pub frames: &'a mut Vec<FrameDef>,
+    /// The frames, taken for the search and given back after it (the
+    /// caller keeps the buffers).
+    pub frames: &'a mut FrameBuffers,
     pub pairs: Vec<PairEntry<'s>>,
     pub skin: f64,
     pub options: &'a SolveOptions,
@@ -40,7 +40,7 @@ impl InArithmetic for Search<'_, '_> {
         // A frame's rotation is enclosed only if some pair reads it (pairs
         // that composites create later only involve frames of composite
         // pairs, which read it).
-        let mut rotation_read = vec![false; frames.len()];
+        let mut rotation_read = vec![false; frames.defs.len()];
         for pair in &pairs {
             let [a, b] = match &pair.kind {
                 PairContent::Leaf(gap, swapped) => gap.reads_rotation_as(*swapped),
@@ -54,7 +54,7 @@ impl InArithmetic for Search<'_, '_> {
         let turn = |f: u32| {
             let f = f as usize;
             if rotation_read[f] {
-                frames[f].motion.rotation().norm()
+                frames.defs[f].motion.rotation().norm()
             } else {
                 0.0
             }
@@ -65,7 +65,7 @@ impl InArithmetic for Search<'_, '_> {
             .fold(0.0, f64::max);
         let mut set = PairSet::<E> {
             widest_turn,
-            frames: Frames::new(std::mem::take(frames), rotation_read),
+            frames: Frames::new(frames, rotation_read),
             initial: pairs.len(),
             pairs,
             skin,
@@ -76,7 +76,7 @@ impl InArithmetic for Search<'_, '_> {
             error: None,
         };
         let outcome = solver.solve(&mut set, options);
-        *frames = set.frames.into_defs();
+        set.frames.into_buffers(frames);
         let outcome = outcome?;
         if let Some(error) = set.error {
             return Err(error);
