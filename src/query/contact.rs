@@ -24,7 +24,7 @@ use rapier3d::parry::query::{
     ClosestPoints, Contact, DefaultQueryDispatcher, NonlinearRigidMotion, QueryDispatcher,
     ShapeCastHit, ShapeDistance, ShapeIntersection, Unsupported,
 };
-use rapier3d::parry::shape::{CompositeShape, HeightField, Shape, SupportMap};
+use rapier3d::parry::shape::{CompositeShape, HeightField, Shape, ShapeType, SupportMap};
 
 /// parry's contact between two posed shapes within `prediction` metres
 /// (`Ok(None)`: farther apart; `Err`: parry has no answer for the pair).
@@ -105,14 +105,20 @@ pub(crate) enum StartContact {
     /// [`contact`]'s answer.
     Found(Option<Contact>),
     /// Apart by more than the band along this unit world direction, from
-    /// the first shape towards the second.
-    ApartAlong(Vector),
+    /// the first shape towards the second. `closest`: the direction of the
+    /// shapes' closest points, along which no other is farther apart; else
+    /// a separating axis, and parry's normal may show more.
+    ApartAlong { direction: Vector, closest: bool },
 }
 
-/// [`contact`] of two posed shapes within `prediction`, except that two
-/// boxes or triangles whose separating axes show them apart by more than
-/// `band` get that axis instead of parry's distance (GJK): a pair beyond
-/// its band needs only a direction along which it stays apart.
+/// [`contact`] of two posed shapes within `prediction`, except for a pair
+/// beyond its band, which needs only a direction along which it stays
+/// apart: two boxes or triangles whose separating axes show them apart by
+/// more than `band` get that axis, and a capsule or cylinder apart from a
+/// box by more (or beyond `prediction`) the direction of its closest
+/// points in closed form, instead of parry's distance (GJK). parry's GJK
+/// distance is never below the true one, so a pair the closed form puts
+/// beyond the band or the prediction is there for parry too.
 pub(crate) fn start_contact(
     pose1: &Pose,
     shape1: &dyn Shape,
@@ -122,6 +128,22 @@ pub(crate) fn start_contact(
     prediction: f32,
 ) -> Result<StartContact, Unsupported> {
     if !sat::handles(shape1, shape2) {
+        // The closed form's distance is the true one to ~1e-5 m (two ways
+        // of composing `f32` poses), where parry's may stop above it.
+        let closed_form = round_and_box(shape1, shape2)
+            .then(|| round_cuboid(pose1, shape1, pose2, shape2, f64::INFINITY));
+        if let Some(Some(Some(c))) = closed_form {
+            let dist = c.dist as f64 - 1.0e-5;
+            if dist > prediction as f64 {
+                return Ok(StartContact::Found(None));
+            }
+            if dist > band {
+                return Ok(StartContact::ApartAlong {
+                    direction: c.normal1,
+                    closest: true,
+                });
+            }
+        }
         return contact(pose1, shape1, pose2, shape2, prediction).map(StartContact::Found);
     }
     let pos12 = pose1.inv_mul(pose2);
@@ -129,13 +151,27 @@ pub(crate) fn start_contact(
     if let SatAnswer::Apart(n, sep) = axes
         && sep > band
     {
-        return Ok(StartContact::ApartAlong(pose1.rotation * glam_from_vec(&n)));
+        return Ok(StartContact::ApartAlong {
+            direction: pose1.rotation * glam_from_vec(&n),
+            closest: false,
+        });
     }
     let found = AxesFirst.polytopes(&pos12, shape1, shape2, prediction, axes)?;
     Ok(StartContact::Found(found.map(|mut c| {
         c.transform_by_mut(pose1, pose2);
         c
     })))
+}
+
+/// Whether one shape is a capsule or a cylinder and the other a box, the
+/// pairs [`round_cuboid`] may answer: two type tags, cheaper than its
+/// downcasts for every other pair.
+fn round_and_box(shape1: &dyn Shape, shape2: &dyn Shape) -> bool {
+    use ShapeType::{Capsule, Cuboid, Cylinder};
+    matches!(
+        (shape1.shape_type(), shape2.shape_type()),
+        (Capsule | Cylinder, Cuboid) | (Cuboid, Capsule | Cylinder)
+    )
 }
 
 /// The contact of a posed capsule or cylinder and a box (either order)
@@ -859,7 +895,7 @@ pub(crate) fn grid(
 mod tests {
     use super::*;
     use rapier3d::math::Rotation;
-    use rapier3d::parry::shape::{Ball, Capsule, Cuboid, Triangle};
+    use rapier3d::parry::shape::{Ball, Capsule, Cuboid, Cylinder, Triangle};
 
     /// Seeded numbers in `[0, 1)` (a linear congruential generator).
     fn uniform(mut seed: u64) -> impl FnMut() -> f32 {
@@ -961,6 +997,70 @@ mod tests {
         assert!(compared > 500, "only {compared} contacts compared");
     }
 
+    /// A capsule or a cylinder and a box at random poses, either order, a
+    /// band and a prediction: where `start_contact` puts the pair beyond
+    /// the band along the closest points' direction, parry's contact puts
+    /// it there too, with nearly that normal, and where it finds nothing
+    /// within the prediction, parry finds nothing; elsewhere its answer is
+    /// parry's own.
+    #[test]
+    fn start_contacts_of_round_shapes_and_boxes_agree_with_parrys() {
+        let mut next = uniform(23u64);
+        let (mut apart, mut beyond, mut parrys) = (0, 0, 0);
+        for case in 0..3000 {
+            let round: Box<dyn Shape> = if case % 2 == 0 {
+                Box::new(Capsule::new_y(0.05 + 0.5 * next(), 0.02 + 0.3 * next()))
+            } else {
+                Box::new(Cylinder::new(0.05 + 0.5 * next(), 0.02 + 0.3 * next()))
+            };
+            let cuboid = Cuboid::new(Vector::new(0.05 + next(), 0.05 + next(), 0.05 + next()));
+            let at = Vector::new(3.0 * next() - 1.5, 3.0 * next() - 1.5, 3.0 * next() - 1.5);
+            let round_pose = Pose::from_parts(at, turn(&mut next));
+            let box_pose = Pose::from_parts(Vector::ZERO, turn(&mut next));
+            let band = 0.2 * next() as f64;
+            let prediction = band as f32 + 0.6 * next();
+            for flip in [false, true] {
+                let (p1, s1, p2, s2): (_, &dyn Shape, _, &dyn Shape) = if flip {
+                    (&box_pose, &cuboid, &round_pose, &*round)
+                } else {
+                    (&round_pose, &*round, &box_pose, &cuboid)
+                };
+                let ours = start_contact(p1, s1, p2, s2, band, prediction).expect("supported");
+                let parry = rapier3d::parry::query::contact(p1, s1, p2, s2, 100.0)
+                    .expect("supported")
+                    .expect("within 100 m");
+                match ours {
+                    StartContact::ApartAlong { direction, closest } => {
+                        apart += 1;
+                        assert!(closest, "case {case}: only closest points here");
+                        assert!(
+                            parry.dist as f64 > band,
+                            "case {case}: parry {}",
+                            parry.dist
+                        );
+                        assert!(
+                            direction.dot(parry.normal1) > 0.99,
+                            "case {case} flip {flip}: {direction:?} vs parry {:?}",
+                            parry.normal1
+                        );
+                    }
+                    StartContact::Found(None) => {
+                        beyond += 1;
+                        assert!(parry.dist > prediction, "case {case}: parry {}", parry.dist);
+                    }
+                    StartContact::Found(Some(c)) => {
+                        parrys += 1;
+                        assert_eq!(c.dist, parry.dist, "case {case} flip {flip}");
+                    }
+                }
+            }
+        }
+        assert!(
+            apart > 500 && beyond > 500 && parrys > 500,
+            "{apart} apart, {beyond} beyond, {parrys} parry's"
+        );
+    }
+
     /// A cylinder and a box: where the closed form answers (apart, the
     /// box's point nearest the axis beside it), its distance is
     /// parry3d-f64's, its points lie on the two surfaces with the
@@ -970,7 +1070,6 @@ mod tests {
     #[test]
     fn cylinder_box_contacts_beside_the_axis_are_exact() {
         use parry3d_f64::shape::{Cuboid as Cuboid64, Cylinder as Cylinder64};
-        use rapier3d::parry::shape::Cylinder;
         let mut next = uniform(11u64);
         let (mut apart, mut answered) = (0, 0);
         for case in 0..3000 {

@@ -431,7 +431,9 @@ fn earliest_piece(
         };
         // Two polytopes whose separating axes show them apart beyond the
         // band need no distance from parry (GJK) if they stay apart along
-        // the axis that shows it; else their start gap as any pair's.
+        // the axis that shows it; else their start gap as any pair's. A
+        // capsule or cylinder and a box apart beyond the band, from their
+        // closest points in closed form, need none at all.
         let start = if convex {
             let found = start_contact(
                 &pose_from_iso(&moving.motion.pose_at(lo)),
@@ -442,8 +444,18 @@ fn earliest_piece(
                 ask as f32,
             );
             match found {
-                Ok(StartContact::ApartAlong(n)) if apart_along(moving, t, n) => continue,
-                Ok(StartContact::ApartAlong(_)) => start_gap(t, ask),
+                Ok(StartContact::ApartAlong { direction, .. })
+                    if apart_along(moving, t, direction) =>
+                {
+                    continue;
+                }
+                // Beyond the band and not shown to stay apart along the
+                // closest points' direction: no other does better.
+                Ok(StartContact::ApartAlong { closest: true, .. }) => {
+                    alive.push(j);
+                    continue;
+                }
+                Ok(StartContact::ApartAlong { .. }) => start_gap(t, ask),
                 Ok(StartContact::Found(c)) => read_gap(Ok(c), ask),
                 Err(e) => read_gap(Err(e), ask),
             }
