@@ -268,6 +268,30 @@ pub(crate) struct TurnMemo {
 
 impl TurnMemo {
     const SIZE: usize = 4;
+
+    /// The products kept for the turn `motion` makes, if any.
+    fn find(&self, motion: &Motion) -> Option<Spin> {
+        self.entries
+            .iter()
+            .find(|(rotation, start, arm, _)| {
+                same_bits(rotation.as_slice(), motion.rotation.as_slice())
+                    && same_bits(arm.as_slice(), motion.arm.as_slice())
+                    && same_bits(start.as_slice(), motion.start_matrix.as_slice())
+            })
+            .map(|&(.., spin)| spin)
+    }
+
+    /// Keeps `spin`, made for `motion`'s turn, in place of the oldest entry
+    /// once all are taken.
+    fn keep(&mut self, motion: &Motion, spin: Spin) {
+        let entry = (motion.rotation, motion.start_matrix, motion.arm, spin);
+        if self.entries.len() < TurnMemo::SIZE {
+            self.entries.push(entry);
+        } else {
+            self.entries[self.next] = entry;
+        }
+        self.next = (self.next + 1) % TurnMemo::SIZE;
+    }
 }
 
 /// A rigid frame's motion over one step: a polynomial path of the centre of
@@ -298,7 +322,8 @@ pub struct Motion {
     /// The turn's products, once prepared ([`Motion::prepare`]); `None`
     /// before, and for a frame that does not turn. Made on first need:
     /// most motions a step builds are only boxed and bounded, never
-    /// enclosed, and preparing one costs more than building the rest.
+    /// enclosed, and preparing one costs about what building the rest
+    /// does.
     spin: Option<Spin>,
 }
 
@@ -414,7 +439,7 @@ impl Motion {
     /// nothing.
     pub fn prepare(&mut self) {
         if self.turning && self.spin.is_none() {
-            self.spin = Spin::new(&self.rotation, &self.start_matrix, &self.arm);
+            self.spin = self.made_spin();
         }
     }
 
@@ -425,25 +450,18 @@ impl Motion {
         if !self.turning || self.spin.is_some() {
             return;
         }
-        let same = |(rotation, start, arm, _): &&TurnEntry| {
-            same_bits(rotation.as_slice(), self.rotation.as_slice())
-                && same_bits(arm.as_slice(), self.arm.as_slice())
-                && same_bits(start.as_slice(), self.start_matrix.as_slice())
-        };
-        if let Some((.., spin)) = memo.entries.iter().find(same) {
-            self.spin = Some(*spin);
-            return;
-        }
-        self.prepare();
-        if let Some(spin) = self.spin {
-            let entry = (self.rotation, self.start_matrix, self.arm, spin);
-            if memo.entries.len() < TurnMemo::SIZE {
-                memo.entries.push(entry);
-            } else {
-                memo.entries[memo.next] = entry;
+        self.spin = memo.find(self).or_else(|| {
+            let made = self.made_spin();
+            if let Some(spin) = made {
+                memo.keep(self, spin);
             }
-            memo.next = (memo.next + 1) % TurnMemo::SIZE;
-        }
+            made
+        });
+    }
+
+    /// The turn's products, made now.
+    fn made_spin(&self) -> Option<Spin> {
+        Spin::new(&self.rotation, &self.start_matrix, &self.arm)
     }
 
     /// The turn's products for an enclosed pose over `span`: `None` where
@@ -456,7 +474,7 @@ impl Motion {
         if self.spin.is_some() {
             return self.spin.as_ref();
         }
-        *fresh = Spin::new(&self.rotation, &self.start_matrix, &self.arm);
+        *fresh = self.made_spin();
         fresh.as_ref()
     }
 
