@@ -130,9 +130,9 @@ pub(crate) fn start_contact(
     if !sat::handles(shape1, shape2) {
         // The closed form's distance is the true one to ~1e-5 m (two ways
         // of composing `f32` poses), where parry's may stop above it.
-        let closed_form = round_and_box(shape1, shape2)
-            .then(|| round_cuboid(pose1, shape1, pose2, shape2, f64::INFINITY));
-        if let Some(Some(Some(c))) = closed_form {
+        if round_and_box(shape1, shape2)
+            && let Some(Some(c)) = round_cuboid(pose1, shape1, pose2, shape2, f64::INFINITY)
+        {
             let dist = c.dist as f64 - 1.0e-5;
             if dist > prediction as f64 {
                 return Ok(StartContact::Found(None));

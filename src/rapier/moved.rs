@@ -42,18 +42,24 @@ pub(crate) fn angle_bound(short: f64, hint: f64) -> f64 {
     if short + hint < PI { short } else { hint + PI }
 }
 
+/// `|sin(θ/2)|` and `|cos(θ/2)|` of the shortest turn `θ` from `start` to
+/// `end`, from the quaternion between them.
+fn half_turn(start: &Pose, end: &Pose) -> (f64, f64) {
+    let dq = end.rotation * start.rotation.inverse();
+    (dq.xyz().length() as f64, dq.w.abs() as f64)
+}
+
 /// The shortest rotation angle from `start` to `end`, radians.
 pub(crate) fn angle_short(start: &Pose, end: &Pose) -> f64 {
-    let dq = end.rotation * start.rotation.inverse();
-    2.0 * (dq.xyz().length() as f64).atan2(dq.w.abs() as f64)
+    let (s, c) = half_turn(start, end);
+    2.0 * s.atan2(c)
 }
 
 /// `|sin(θ/2)|` of the turn from `start` to `end` (`θ` its shortest
 /// angle), with no atan2: `π` times it bounds `θ`, and twice it is the
 /// chord a unit arm sweeps.
 pub(crate) fn half_angle_sine(start: &Pose, end: &Pose) -> f64 {
-    let dq = end.rotation * start.rotation.inverse();
-    dq.xyz().length() as f64
+    half_turn(start, end).0
 }
 
 /// Bound on the chord a unit arm sweeps on the motion `Motion::from_poses`
@@ -65,8 +71,7 @@ pub(crate) fn half_angle_sine(start: &Pose, end: &Pose) -> f64 {
 /// `2·s/c` (`atan x ≤ x`) and at most `π·s`, `s` and `c` the sine and
 /// cosine of `θ/2`.
 pub(crate) fn chord_bound(start: &Pose, end: &Pose, hint: f64) -> f64 {
-    let dq = end.rotation * start.rotation.inverse();
-    let (s, c) = (dq.xyz().length() as f64, dq.w.abs() as f64);
+    let (s, c) = half_turn(start, end);
     let short = if c > s { 2.0 * s / c } else { PI * s };
     if short + hint < PI {
         (2.0 * s).min(2.0)
