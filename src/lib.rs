@@ -15,6 +15,7 @@ pub mod convert;
 pub mod enclosure;
 pub mod error;
 pub(crate) mod gap;
+pub(crate) mod hashing;
 pub mod motion;
 pub mod query;
 pub mod rapier;

@@ -8,9 +8,9 @@
 
 use crate::enclosure::{Enclosure, TimeSpan};
 use crate::gap::KeptPose;
+use crate::hashing::FastMap;
 use crate::motion::{Motion, Pose, Trajectory, TurnMemo, column, row};
 use nalgebra::{Isometry3, Matrix3, Vector3};
-use std::collections::HashMap;
 
 /// A frame of the search: a body's motion, or a frame fixed to another at
 /// a local pose (a compound's part).
@@ -38,7 +38,7 @@ pub(super) struct Frames<E: Enclosure> {
     /// origin, which saves enclosing a rotating matrix per node.)
     rotation_read: Vec<bool>,
     /// (parent frame, part index) → the part's frame.
-    child_frames: HashMap<(u32, u32), u32>,
+    child_frames: FastMap<(u32, u32), u32>,
     /// `(to, from, pose of from in to)` for this node.
     relative: Vec<(u32, u32, Pose<E>)>,
     /// Per frame: its last exact pose (`Side::pose_at`).
@@ -64,7 +64,7 @@ impl<E: Enclosure> Frames<E> {
             kept: (0..defs.len()).map(|_| KeptPose::default()).collect(),
             defs,
             rotation_read,
-            child_frames: HashMap::new(),
+            child_frames: FastMap::default(),
             relative: Vec::new(),
         }
     }

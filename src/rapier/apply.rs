@@ -7,6 +7,7 @@ use super::report::{CcdHitEvent, CcdReport, SkipReason};
 use super::rounds::Plan;
 use super::sweep::{self, SensorPair};
 use crate::convert::{glam_from_vec, pose_from_iso};
+use crate::hashing::FastMap;
 use crate::motion::Trajectory;
 use crate::query::QueryOptions;
 use rapier3d::parry::query::{DefaultQueryDispatcher, QueryDispatcher};
@@ -14,7 +15,6 @@ use rapier3d::parry::shape::Shape;
 use rapier3d::prelude::{
     ColliderSet, CollisionEvent, CollisionEventFlags, EventHandler, RigidBodySet, Vector,
 };
-use std::collections::HashMap;
 
 /// A clamp that keeps at most this share of the body's motion holds it
 /// where it started.
@@ -31,7 +31,7 @@ pub(crate) fn apply(
     events: &dyn EventHandler,
     report: &mut CcdReport,
 ) {
-    let mut stops = HashMap::new();
+    let mut stops = FastMap::default();
     for (i, hit) in &plan.hits {
         let body = &plan.moved[*i];
         clamp::clamp(bodies, body);

@@ -11,10 +11,10 @@ use super::moved::{Moved, relative_travel};
 use super::report::{CcdReport, SkipReason};
 use super::sweep::{self, Sweeper, Workspace};
 use super::world::{StageWorld, StepMotions};
+use crate::hashing::{FastMap, FastSet};
 use crate::query::QueryOptions;
 use rapier3d::parry::bounding_volume::Aabb;
 use rapier3d::prelude::{QueryFilter, RigidBodyHandle, Vector};
-use std::collections::{HashMap, HashSet};
 
 /// Most bodies one step's pushers carry.
 const MAX_CARRIED: usize = 64;
@@ -42,7 +42,7 @@ struct Cand {
 pub(super) fn push(
     q: &Sweeper,
     current: &mut Vec<Moved>,
-    front: &mut HashSet<RigidBodyHandle>,
+    front: &mut FastSet<RigidBodyHandle>,
     opts: &QueryOptions,
     ws: &mut Workspace,
     report: &mut CcdReport,
@@ -50,9 +50,9 @@ pub(super) fn push(
     let (scene, dt) = (q.scene, q.dt);
     let mut out = Vec::new();
     let mut cands: Vec<Cand> = Vec::new();
-    let mut seen: HashSet<RigidBodyHandle> = front.clone();
-    let mut fresh: HashSet<RigidBodyHandle> = front.clone();
-    let mut velocities: HashMap<RigidBodyHandle, Vector> = HashMap::new();
+    let mut seen: FastSet<RigidBodyHandle> = front.clone();
+    let mut fresh: FastSet<RigidBodyHandle> = front.clone();
+    let mut velocities: FastMap<RigidBodyHandle, Vector> = FastMap::default();
     let boxes: Vec<_> = current
         .iter()
         .filter(|m| m.pusher)
@@ -107,7 +107,7 @@ pub(super) fn push(
 fn gather_near(
     q: &Sweeper,
     current: &mut Vec<Moved>,
-    seen: &mut HashSet<RigidBodyHandle>,
+    seen: &mut FastSet<RigidBodyHandle>,
     b: Aabb,
     cands: &mut Vec<Cand>,
 ) {
@@ -165,8 +165,8 @@ fn sweep_candidates(
     opts: &QueryOptions,
     current: &[Moved],
     cands: &mut [Cand],
-    front: &HashSet<RigidBodyHandle>,
-    fresh: &HashSet<RigidBodyHandle>,
+    front: &FastSet<RigidBodyHandle>,
+    fresh: &FastSet<RigidBodyHandle>,
     ws: &mut Workspace,
     report: &mut CcdReport,
 ) {

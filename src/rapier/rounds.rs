@@ -9,12 +9,12 @@ use super::push;
 use super::report::{CcdReport, SkipReason};
 use super::sweep::{self, SensorPair, Sweeper, Workspace};
 use super::world::{MotionCache, StageWorld, StepMotions};
+use crate::hashing::FastSet;
 use crate::query::QueryOptions;
 use rapier3d::parry::bounding_volume::{Aabb, BoundingVolume};
 use rapier3d::prelude::{
     BroadPhaseBvh, Collider, ColliderHandle, NarrowPhase, RigidBodyHandle, Vector,
 };
-use std::collections::HashSet;
 
 /// What the sweeps found, applied after all of them (so that the order of
 /// the bodies does not matter).
@@ -123,13 +123,13 @@ struct Rounds {
     last: Vec<Option<sweep::BodyHit>>,
     held: Vec<bool>,
     /// Fast kinematic bodies and what they carry.
-    pushing: HashSet<RigidBodyHandle>,
-    carried: HashSet<RigidBodyHandle>,
+    pushing: FastSet<RigidBodyHandle>,
+    carried: FastSet<RigidBodyHandle>,
     /// Bodies cut in the last round, as indices and as handles.
     changed: Vec<usize>,
-    changed_set: HashSet<RigidBodyHandle>,
+    changed_set: FastSet<RigidBodyHandle>,
     /// Clamped bodies whose cut motion is not part of the old path.
-    rerouted: HashSet<RigidBodyHandle>,
+    rerouted: FastSet<RigidBodyHandle>,
     sensors: Vec<SensorPair>,
 }
 
@@ -147,10 +147,10 @@ impl Rounds {
                 .map(|m| m.handle)
                 .collect(),
             current: moved,
-            carried: HashSet::new(),
+            carried: FastSet::default(),
             changed: Vec::new(),
-            changed_set: HashSet::new(),
-            rerouted: HashSet::new(),
+            changed_set: FastSet::default(),
+            rerouted: FastSet::default(),
             sensors: Vec::new(),
         }
     }

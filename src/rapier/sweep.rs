@@ -17,6 +17,7 @@ use super::world::{MotionCache, StageWorld, StepMotions};
 use crate::convert::{pose_from_iso, vec_from_glam};
 use crate::enclosure::TimeSpan;
 use crate::error::CcdError;
+use crate::hashing::FastSet;
 use crate::motion::{Motion, Trajectory};
 use crate::query::{QueryOptions, ShapeMotion, StartContact, Toi, Witness, start_contact};
 use crate::solve::RootStatus;
@@ -26,7 +27,6 @@ use rapier3d::parry::shape::Shape;
 use rapier3d::prelude::RigidBodyHandle;
 use rapier3d::prelude::{BroadPhaseBvh, Collider, ColliderHandle, Vector};
 use smallvec::SmallVec;
-use std::collections::HashSet;
 
 /// A list of one sweep's targets' small values (indices, travels,
 /// flags), kept on the stack: most sweeps have a few targets, and each
@@ -67,11 +67,11 @@ pub(crate) enum Targets<'a> {
     Moving,
     /// Only colliders of these bodies (whose motion was cut short, or
     /// fast kinematic bodies and what they carry).
-    Only(&'a HashSet<RigidBodyHandle>),
+    Only(&'a FastSet<RigidBodyHandle>),
     /// Everything but dynamic bodies and these (a body carried by a
     /// kinematic one: what it meets on the way is pushed in turn, the
     /// pushers carry it, only the rest stops it).
-    Blockers(&'a HashSet<RigidBodyHandle>),
+    Blockers(&'a FastSet<RigidBodyHandle>),
 }
 
 impl Targets<'_> {
@@ -111,7 +111,7 @@ pub(crate) struct Workspace {
     moving: MovingBoxes,
     /// The collider pairs the last step's clamps held at their start
     /// (moving collider, target), either way round (see [`HELD`]).
-    held: HashSet<(ColliderHandle, ColliderHandle)>,
+    held: FastSet<(ColliderHandle, ColliderHandle)>,
 }
 
 /// A clamp at most this share into the step holds its body at its start.
