@@ -987,8 +987,11 @@ impl Trajectory for Motion {
 
     fn pose_at(&self, tau: f64) -> Isometry3<f64> {
         let center = self.center.coords + self.displacement * tau + self.bend * (tau * tau);
-        if !self.turning {
-            // No turn (or one below any length scale, see `Spin::NEGLIGIBLE`).
+        // No turn (or one below any length scale, see `Spin::NEGLIGIBLE`),
+        // or the step's start, where the frame has not turned yet (the
+        // start contacts and boxes ask there, and the turn would cost a
+        // sine and a cosine).
+        if !self.turning || tau == 0.0 {
             let origin = center + self.arm;
             return Isometry3::from_parts(Translation3::from(origin), self.start_rotation);
         }
