@@ -137,7 +137,7 @@ pub trait Trajectory {
 /// radius per group, so that each node costs two multiplications of an
 /// enclosure by a number per entry.
 #[derive(Clone, Copy, Debug, PartialEq)]
-struct Spin {
+pub(crate) struct Spin {
     angle: f64,
     angle_err: f64,
     rot_k: Matrix3<f64>,
@@ -254,7 +254,7 @@ fn same_bits(a: &[f64], b: &[f64]) -> bool {
     a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits())
 }
 
-/// The turns prepared last ([`Motion::prepare_with`]), by what they were
+/// The turns prepared last ([`Motion::turn_products`]), by what they were
 /// made from: a step's searches enclose the same motion again and again
 /// (a hit, its stop, a touching pair's proof), each in a query of its own.
 /// A handful, looked up by comparing what they were made from: next to
@@ -296,10 +296,7 @@ impl TurnMemo {
 
 /// A rigid frame's motion over one step: a polynomial path of the centre of
 /// mass and a constant angular velocity about it (see the module docs).
-///
-/// Two motions are equal when their definitions are: whether the turn's
-/// products are prepared yet ([`Motion::prepare`]) does not count.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Motion {
     /// Rotation centre (body centre of mass) at `τ = 0`, world, metres.
     center: Point3<f64>,
@@ -319,27 +316,6 @@ pub struct Motion {
     dt: f64,
     /// The frame turns: `|rotation|` is above `Spin::NEGLIGIBLE`.
     turning: bool,
-    /// The turn's products, once prepared ([`Motion::prepare`]); `None`
-    /// before, and for a frame that does not turn. Made on first need:
-    /// most motions a step builds are only boxed and bounded, never
-    /// enclosed, and preparing one costs about what building the rest
-    /// does.
-    spin: Option<Spin>,
-}
-
-impl PartialEq for Motion {
-    fn eq(&self, other: &Motion) -> bool {
-        // `spin` follows from the other fields.
-        self.center == other.center
-            && self.arm == other.arm
-            && self.start_rotation == other.start_rotation
-            && self.start_matrix == other.start_matrix
-            && self.displacement == other.displacement
-            && self.bend == other.bend
-            && self.rotation == other.rotation
-            && self.dt == other.dt
-            && self.turning == other.turning
-    }
 }
 
 fn check_vector(what: &'static str, v: &Vector3<f64>) -> Result<(), CcdError> {
@@ -429,34 +405,27 @@ impl Motion {
             rotation,
             dt,
             turning: Spin::turns(&rotation),
-            spin: None,
         }
     }
 
-    /// Prepares the turn's products that every enclosed pose reads
-    /// ([`Trajectory::pose`] makes them anew on each call otherwise). A
-    /// query prepares the motions it encloses; preparing twice does
-    /// nothing.
-    pub fn prepare(&mut self) {
-        if self.turning && self.spin.is_none() {
-            self.spin = self.made_spin();
+    /// The turn's products that every enclosed pose reads (`None` for a
+    /// frame that does not turn), taken from `memo` when a motion with the
+    /// same turn was prepared lately, and left there. They are kept apart
+    /// from the motion, by whoever encloses it again and again (a search's
+    /// frames): most motions a step builds are only boxed and bounded,
+    /// never enclosed, and a motion is copied often (a `Spin` would double
+    /// its size).
+    pub(crate) fn turn_products(&self, memo: &mut TurnMemo) -> Option<Spin> {
+        if !self.turning {
+            return None;
         }
-    }
-
-    /// [`prepare`](Motion::prepare), taking the products from `memo` when
-    /// a motion with the same turn was prepared lately, and leaving them
-    /// there.
-    pub(crate) fn prepare_with(&mut self, memo: &mut TurnMemo) {
-        if !self.turning || self.spin.is_some() {
-            return;
-        }
-        self.spin = memo.find(self).or_else(|| {
+        memo.find(self).or_else(|| {
             let made = self.made_spin();
             if let Some(spin) = made {
                 memo.keep(self, spin);
             }
             made
-        });
+        })
     }
 
     /// The turn's products, made now.
@@ -466,16 +435,71 @@ impl Motion {
 
     /// The turn's products for an enclosed pose over `span`: `None` where
     /// the frame has not turned (it does not turn, or `span` is the start).
-    /// Read in place when prepared, else made into `fresh`.
-    fn spin_over<'a>(&'a self, span: TimeSpan, fresh: &'a mut Option<Spin>) -> Option<&'a Spin> {
+    /// `prepared` when given ([`Motion::turn_products`]), else made into
+    /// `fresh`.
+    fn spin_over<'a>(
+        &self,
+        span: TimeSpan,
+        prepared: Option<&'a Spin>,
+        fresh: &'a mut Option<Spin>,
+    ) -> Option<&'a Spin> {
         if !self.turning || at_start(span) {
             return None;
         }
-        if self.spin.is_some() {
-            return self.spin.as_ref();
+        if prepared.is_some() {
+            return prepared;
         }
         *fresh = self.made_spin();
         fresh.as_ref()
+    }
+
+    /// [`Trajectory::pose`], with the turn's products `prepared` by
+    /// [`Motion::turn_products`] (`None`: made for this call).
+    pub(crate) fn pose_with<E: Enclosure>(
+        &self,
+        span: TimeSpan,
+        prepared: Option<&Spin>,
+    ) -> Pose<E> {
+        let tau = E::time(span);
+        let center = self.center_at(tau);
+        let mut fresh = None;
+        let Some(spin) = self.spin_over(span, prepared, &mut fresh) else {
+            return Pose {
+                rotation: self.start_matrix.map(E::constant),
+                translation: center + self.arm.map(E::constant),
+            };
+        };
+        let (s, c, mag) = spin.angle_terms(tau);
+        Pose {
+            rotation: spin.rotation(&self.start_matrix, s, c, mag),
+            translation: center + spin.arm(&self.arm, s, c, mag),
+        }
+    }
+
+    /// [`Trajectory::origin`], with the turn's products as in
+    /// [`Motion::pose_with`].
+    pub(crate) fn origin_with<E: Enclosure>(
+        &self,
+        span: TimeSpan,
+        prepared: Option<&Spin>,
+    ) -> Vector3<E> {
+        let tau = E::time(span);
+        let center = self.center_at(tau);
+        if !self.turning || at_start(span) {
+            return center + self.arm.map(E::constant);
+        }
+        if self.arm == Vector3::zeros() {
+            // The origin is the rotation centre: turning moves it not.
+            return center;
+        }
+        let mut fresh = None;
+        match self.spin_over(span, prepared, &mut fresh) {
+            None => center + self.arm.map(E::constant),
+            Some(spin) => {
+                let (s, c, mag) = spin.angle_terms(tau);
+                center + spin.arm(&self.arm, s, c, mag)
+            }
+        }
     }
 
     /// The same motion with a constant linear acceleration `linacc` (m/s²)
@@ -539,12 +563,6 @@ impl Motion {
         motion.start_rotation =
             UnitQuaternion::new_normalize((self.start_rotation * local.rotation).into_inner());
         motion.start_matrix = *motion.start_rotation.to_rotation_matrix().matrix();
-        // The prepared rotation products depend on the start and the arm:
-        // made anew if this motion's were.
-        motion.spin = None;
-        if self.spin.is_some() {
-            motion.prepare();
-        }
         motion
     }
 
@@ -949,40 +967,11 @@ fn whole_turns(base: &Vector3<f64>, hint: &Vector3<f64>) -> Vector3<f64> {
 
 impl Trajectory for Motion {
     fn pose<E: Enclosure>(&self, span: TimeSpan) -> Pose<E> {
-        let tau = E::time(span);
-        let center = self.center_at(tau);
-        let mut fresh = None;
-        let Some(spin) = self.spin_over(span, &mut fresh) else {
-            return Pose {
-                rotation: self.start_matrix.map(E::constant),
-                translation: center + self.arm.map(E::constant),
-            };
-        };
-        let (s, c, mag) = spin.angle_terms(tau);
-        Pose {
-            rotation: spin.rotation(&self.start_matrix, s, c, mag),
-            translation: center + spin.arm(&self.arm, s, c, mag),
-        }
+        self.pose_with(span, None)
     }
 
     fn origin<E: Enclosure>(&self, span: TimeSpan) -> Vector3<E> {
-        let tau = E::time(span);
-        let center = self.center_at(tau);
-        if !self.turning || at_start(span) {
-            return center + self.arm.map(E::constant);
-        }
-        if self.arm == Vector3::zeros() {
-            // The origin is the rotation centre: turning moves it not.
-            return center;
-        }
-        let mut fresh = None;
-        match self.spin_over(span, &mut fresh) {
-            None => center + self.arm.map(E::constant),
-            Some(spin) => {
-                let (s, c, mag) = spin.angle_terms(tau);
-                center + spin.arm(&self.arm, s, c, mag)
-            }
-        }
+        self.origin_with(span, None)
     }
 
     fn pose_at(&self, tau: f64) -> Isometry3<f64> {
@@ -1223,13 +1212,14 @@ mod tests {
         }
     }
 
-    /// A turn prepared on first need encloses bit for bit what one
-    /// prepared at once does (the stage's motions are prepared by the
-    /// query that encloses them; a user's may never be), over the whole
-    /// step, a node, and the start; a frame carried by a turning one too,
-    /// and one whose origin is its rotation centre (a ball's).
+    /// The turn's products kept apart from the motion (a search's frames
+    /// keep them, `Motion::turn_products`) enclose bit for bit what the
+    /// products made for each call do (a user's motion, enclosed through
+    /// `Trajectory`), over the whole step, a node, and the start; a frame
+    /// carried by a turning one too, and one whose origin is its rotation
+    /// centre (a ball's).
     #[test]
-    fn a_turn_prepared_late_encloses_what_one_prepared_first_does() {
+    fn kept_turn_products_enclose_what_fresh_ones_do() {
         use crate::enclosure::Affine;
         let spans = [
             TimeSpan::STEP,
@@ -1237,12 +1227,13 @@ mod tests {
             TimeSpan::new(0.0, 0.0),
         ];
         let local = Isometry3::new(Vector3::new(0.2, -0.1, 0.4), Vector3::new(0.3, 0.0, -0.2));
+        let mut memo = TurnMemo::default();
         for (center, angvel) in [
             ([0.3, -0.2, 0.1], [4.0, -30.0, 12.0]),
             ([0.0, 0.0, 0.0], [0.0, 700.0, 0.0]),
             ([0.5, 0.5, 0.5], [0.0, 0.0, 0.0]),
         ] {
-            let lazy = sampled_motion(
+            let motion = sampled_motion(
                 [1.0, 2.0, 3.0],
                 [0.1, 0.2, 0.3],
                 center,
@@ -1250,31 +1241,18 @@ mod tests {
                 angvel,
                 [0.0; 3],
             );
-            let mut prepared = lazy;
-            prepared.prepare();
-            assert!(lazy.spin.is_none(), "built unprepared");
-            assert_eq!(
-                prepared.spin.is_some(),
-                lazy.turns(),
-                "prepared when it turns"
-            );
-            assert_eq!(lazy, prepared, "preparing does not change the motion");
-            for (lazy, prepared) in [
-                (lazy, prepared),
-                (
-                    lazy.with_local_frame(&local),
-                    prepared.with_local_frame(&local),
-                ),
-            ] {
+            for motion in [motion, motion.with_local_frame(&local)] {
+                let kept = motion.turn_products(&mut memo);
+                assert_eq!(kept.is_some(), motion.turns(), "kept when it turns");
                 for span in spans {
                     assert_eq!(
-                        lazy.pose::<Affine>(span),
-                        prepared.pose::<Affine>(span),
+                        motion.pose_with::<Affine>(span, kept.as_ref()),
+                        motion.pose::<Affine>(span),
                         "{span:?}"
                     );
                     assert_eq!(
-                        lazy.origin::<Affine>(span),
-                        prepared.origin::<Affine>(span),
+                        motion.origin_with::<Affine>(span, kept.as_ref()),
+                        motion.origin::<Affine>(span),
                         "{span:?}"
                     );
                 }
@@ -1315,12 +1293,10 @@ mod tests {
             .chain(0..motions.len())
             .chain([motions.len() - 1]);
         for i in order {
-            let mut through_memo = motions[i];
-            through_memo.prepare_with(&mut memo);
-            let mut direct = motions[i];
-            direct.prepare();
-            assert!(direct.spin.is_some());
-            assert_eq!(through_memo.spin, direct.spin, "motion {i}");
+            let through_memo = motions[i].turn_products(&mut memo);
+            let direct = motions[i].made_spin();
+            assert!(direct.is_some());
+            assert_eq!(through_memo, direct, "motion {i}");
         }
     }
 }

@@ -3,13 +3,13 @@
 //! local pose). Each frame's pose is enclosed once per node, on first use,
 //! for every pair that reads it; so are the relative poses composite pairs
 //! read, and each frame keeps its last exact pose (at a node's middle).
-//! A frame's motion has its turn prepared ([`Motion::prepare`]) on its
-//! first enclosed pose.
+//! A frame's turn products ([`Motion::turn_products`]) are made on its
+//! first enclosed pose and kept with the frame.
 
 use crate::enclosure::{Enclosure, TimeSpan};
 use crate::gap::KeptPose;
 use crate::hashing::FastMap;
-use crate::motion::{Motion, Pose, Trajectory, TurnMemo, column, row};
+use crate::motion::{Motion, Pose, Spin, TurnMemo, column, row};
 use nalgebra::{Isometry3, Matrix3, Vector3};
 
 /// A frame of the search: a body's motion, or a frame fixed to another at
@@ -17,6 +17,9 @@ use nalgebra::{Isometry3, Matrix3, Vector3};
 #[derive(Debug)]
 pub(super) struct FrameDef {
     pub motion: Motion,
+    /// The motion's turn products, once its pose is first enclosed (only
+    /// a root frame's: a part's pose comes from its parent's).
+    turn: Option<Spin>,
     /// The parent frame and this frame's rotation and origin in it.
     pub parent: Option<(u32, Matrix3<f64>, Vector3<f64>)>,
 }
@@ -25,6 +28,7 @@ impl FrameDef {
     pub fn root(motion: Motion) -> FrameDef {
         FrameDef {
             motion,
+            turn: None,
             parent: None,
         }
     }
@@ -104,18 +108,21 @@ impl<E: Enclosure> Frames<E> {
         let pose = match self.defs[i].parent {
             None if !self.rotation_read[i] => {
                 // Only the origin is read: the rotation stays at its start.
-                let motion = &mut self.defs[i].motion;
-                if motion.origin_turns() {
-                    motion.prepare_with(&mut self.turns);
+                let def = &mut self.defs[i];
+                if def.turn.is_none() && def.motion.origin_turns() {
+                    def.turn = def.motion.turn_products(&mut self.turns);
                 }
+                let motion = &def.motion;
                 let mut pose = Pose::constant(&motion.start_rotation_matrix(), &Vector3::zeros());
-                pose.translation = motion.origin(span);
+                pose.translation = motion.origin_with(span, def.turn.as_ref());
                 pose
             }
             None => {
-                let motion = &mut self.defs[i].motion;
-                motion.prepare_with(&mut self.turns);
-                motion.pose(span)
+                let def = &mut self.defs[i];
+                if def.turn.is_none() {
+                    def.turn = def.motion.turn_products(&mut self.turns);
+                }
+                def.motion.pose_with(span, def.turn.as_ref())
             }
             Some((parent, rotation, origin)) => {
                 let p = self.pose(parent, span);
@@ -192,6 +199,7 @@ impl<E: Enclosure> Frames<E> {
         let id = self.defs.len() as u32;
         self.defs.push(FrameDef {
             motion,
+            turn: None,
             parent: Some((parent, rotation, local.translation.vector)),
         });
         self.poses.push(None);

@@ -220,7 +220,7 @@ fn earliest(
             origin.push(j);
         }
     }
-    // Unsplit targets go as they are (a motion is 456 bytes); `origin` is
+    // Unsplit targets go as they are (a motion is 240 bytes); `origin` is
     // then the identity.
     let (mut pieces, mut piece_travels, mut piece_contacts) =
         (Vec::new(), Few::<f64>::new(), Few::<bool>::new());
