@@ -99,11 +99,14 @@ impl<E: Enclosure> Frames<E> {
         self.relative.clear();
     }
 
-    /// The enclosed pose of frame `index` over the node `span`.
-    pub fn pose(&mut self, index: u32, span: TimeSpan) -> Pose<E> {
+    /// The enclosed pose of frame `index` over the node `span`, enclosed
+    /// now if this node has not yet (read it with
+    /// [`pose_of`](Frames::pose_of): a pose is 36 enclosures, and copying
+    /// it out for every pair cost more than reading it in place).
+    pub fn enclose(&mut self, index: u32, span: TimeSpan) {
         let i = index as usize;
-        if let Some(p) = self.poses[i] {
-            return p;
+        if self.poses[i].is_some() {
+            return;
         }
         let pose = match self.defs[i].parent {
             None if !self.rotation_read[i] => {
@@ -125,7 +128,8 @@ impl<E: Enclosure> Frames<E> {
                 def.motion.pose_with(span, def.turn.as_ref())
             }
             Some((parent, rotation, origin)) => {
-                let p = self.pose(parent, span);
+                self.enclose(parent, span);
+                let p = self.pose_of(parent);
                 Pose {
                     rotation: Matrix3::from_fn(|r, c| {
                         E::dot_f64(row(&p.rotation, r), column(&rotation, c))
@@ -135,52 +139,45 @@ impl<E: Enclosure> Frames<E> {
             }
         };
         self.poses[i] = Some(pose);
-        pose
+    }
+
+    /// The pose of frame `index` over this node, enclosed already
+    /// ([`enclose`](Frames::enclose)).
+    pub fn pose_of(&self, index: u32) -> &Pose<E> {
+        self.poses[index as usize]
+            .as_ref()
+            .expect("a frame's pose is enclosed before it is read")
     }
 
     /// The pose of frame `from` in frame `to`'s coordinates over the node.
     pub fn relative(&mut self, to: u32, from: u32, span: TimeSpan) -> Pose<E> {
-        let kept = match self.find_relative(to, from) {
-            Some(kept) => kept,
-            None => {
-                let (pt, pf) = (self.pose(to, span), self.pose(from, span));
-                self.push_relative(to, from, &pt, &pf)
-            }
-        };
+        self.enclose(to, span);
+        self.enclose(from, span);
+        let kept = self.keep_relative(to, from);
         self.relative[kept].2
     }
 
     /// [`relative`](Frames::relative) from the two frames' poses on this
-    /// node, `pt` and `pf`, kept: the index to read it back by reference
-    /// with [`kept_relative`](Frames::kept_relative).
-    fn keep_relative(&mut self, to: u32, from: u32, pt: &Pose<E>, pf: &Pose<E>) -> usize {
-        self.find_relative(to, from)
-            .unwrap_or_else(|| self.push_relative(to, from, pt, pf))
-    }
-
-    fn find_relative(&self, to: u32, from: u32) -> Option<usize> {
-        self.relative.iter().position(|r| r.0 == to && r.1 == from)
-    }
-
-    fn push_relative(&mut self, to: u32, from: u32, pt: &Pose<E>, pf: &Pose<E>) -> usize {
-        self.relative.push((to, from, pt.relative(pf)));
+    /// node, enclosed already, kept: the index to read it back by
+    /// reference with [`kept_relative`](Frames::kept_relative).
+    fn keep_relative(&mut self, to: u32, from: u32) -> usize {
+        if let Some(kept) = self.relative.iter().position(|r| r.0 == to && r.1 == from) {
+            return kept;
+        }
+        let pose = self.pose_of(to).relative(self.pose_of(from));
+        self.relative.push((to, from, pose));
         self.relative.len() - 1
     }
 
     /// [`keep_relative`](Frames::keep_relative) of `b` in `a` and of `a`
-    /// in `b` as `reads` asks, from their poses on this node. Kept out of
-    /// line: only a composite's pieces ask, and the evaluation of every
-    /// pair runs through its caller.
+    /// in `b` as `reads` asks, from their poses on this node, enclosed
+    /// already. Kept out of line: only a composite's pieces ask, and the
+    /// evaluation of every pair runs through its caller.
     #[inline(never)]
-    pub fn keep_relatives(
-        &mut self,
-        reads: [bool; 2],
-        [a, b]: [u32; 2],
-        [pa, pb]: [&Pose<E>; 2],
-    ) -> [Option<usize>; 2] {
+    pub fn keep_relatives(&mut self, reads: [bool; 2], [a, b]: [u32; 2]) -> [Option<usize>; 2] {
         [
-            reads[0].then(|| self.keep_relative(a, b, pa, pb)),
-            reads[1].then(|| self.keep_relative(b, a, pb, pa)),
+            reads[0].then(|| self.keep_relative(a, b)),
+            reads[1].then(|| self.keep_relative(b, a)),
         ]
     }
 

@@ -505,17 +505,14 @@ impl<E: Enclosure> GapSet<E> for PairSet<'_, E> {
                 {
                     return;
                 }
-                let pa = self.frames.pose(fa, span);
-                let pb = self.frames.pose(fb, span);
+                self.frames.enclose(fa, span);
+                self.frames.enclose(fb, span);
                 // The pieces of a split composite share their frames (a box
                 // against each triangle of a mesh): the relative poses their
                 // family reads are kept for the node. A pair of the
                 // caller's is the only one between its frames.
                 let [b_in_a, a_in_b] = match entry.piece {
-                    Some(_) => {
-                        self.frames
-                            .keep_relatives(gap.reads_relative(), [fa, fb], [&pa, &pb])
-                    }
+                    Some(_) => self.frames.keep_relatives(gap.reads_relative(), [fa, fb]),
                     None => [None, None],
                 };
                 let relative = Relative {
@@ -528,12 +525,12 @@ impl<E: Enclosure> GapSet<E> for PairSet<'_, E> {
                 let keeps = entry.piece.is_some() || piece_of_spin;
                 let kept = |f| keeps.then(|| self.frames.kept(f));
                 let a = Side {
-                    pose: &pa,
+                    pose: self.frames.pose_of(fa),
                     motion: self.frames.motion(fa),
                     kept: kept(fa),
                 };
                 let b = Side {
-                    pose: &pb,
+                    pose: self.frames.pose_of(fb),
                     motion: self.frames.motion(fb),
                     kept: kept(fb),
                 };
