@@ -320,6 +320,7 @@ fn earliest_piece(
                 lo,
                 opts.time_range.hi,
                 depth,
+                rules.sweep_tolerance(),
                 false,
                 opts,
                 report,

@@ -156,6 +156,7 @@ pub(super) fn touching_pair(
             lo,
             hi,
             allowed + DEEPER,
+            rules.sweep_tolerance(),
             driven > 0.0,
             opts,
             report,
@@ -258,7 +259,10 @@ pub(super) fn touching_pair(
             // gets that deep; an unrounded pair `slop` before its true
             // contact (zero skin).
             if let Some(depth) = rules.deep_stop(gap, moving, target) {
-                return stop_when_deep(moving, target, tau, hi, depth, false, opts, report);
+                let tolerance = rules.sweep_tolerance();
+                return stop_when_deep(
+                    moving, target, tau, hi, depth, tolerance, false, opts, report,
+                );
             }
             let rest = QueryOptions {
                 time_range: TimeSpan::new(tau, hi),
@@ -492,7 +496,7 @@ mod tests {
             if never_as_deep(&moving, &target, &first, depth) {
                 let mut report = CcdReport::default();
                 let opts = QueryOptions::default();
-                let deep = stop_when_deep(&moving, &target, 0.0, 1.0, depth, false, &opts, &mut report);
+                let deep = stop_when_deep(&moving, &target, 0.0, 1.0, depth, 0.0, false, &opts, &mut report);
                 prop_assert!(
                     matches!(deep, Ok(None)),
                     "start gap {}: the search finds it {} deep at {:?}",
