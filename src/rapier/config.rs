@@ -44,7 +44,9 @@ impl Default for SweepTargets {
 /// CCD stops it, read from the world's `IntegrationParameters`
 /// (`allowed_linear_error`, 5 mm by default): a pair of unrounded shapes
 /// (boxes, triangles, hulls) that far before its true contact, a pair with
-/// a ball or capsule in it that deep after it.
+/// a ball or capsule in it that deep after it, found as closely as rapier
+/// finds it: within parry's tolerance (a quarter of that error) of that
+/// depth, never deeper, however small `epsilon` is.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
 pub struct CcdConfig {
