@@ -26,6 +26,7 @@ use nalgebra::{Isometry3, Point3, Vector3};
 use rapier3d::parry::bounding_volume::BoundingVolume;
 use rapier3d::parry::math::Vector;
 use rapier3d::parry::shape::{Shape, SharedShape, SupportMap, TypedShape};
+use smallvec::{SmallVec, smallvec};
 
 /// Share of the skin a clamp at the true contact backs off (when rapier's
 /// rule does not say otherwise: a budget ran out, a pair touching at the
@@ -292,7 +293,7 @@ fn pair_points_approach_within(
             core_points(s.shape)
         } else {
             // Every point of a shape that does not turn advances alike.
-            Some(vec![Vector3::zeros()])
+            Some(smallvec![Vector3::zeros()])
         }
     };
     let (Some(p), Some(q)) = (points(moving), points(target)) else {
@@ -391,7 +392,7 @@ pub(super) fn overlap_along(
 struct MeshOverlap {
     /// The mesh's vertices (its frame) and the target's core points.
     points: Vec<Vector3<f64>>,
-    target_points: Vec<Vector3<f64>>,
+    target_points: CorePoints,
     /// How far the mesh's farthest vertex along `n` reaches past the
     /// target's nearest support point, metres (negative: apart).
     overlap: f64,
@@ -416,7 +417,7 @@ impl MeshOverlap {
         let target_points = if target.motion.turns() {
             core_points(target.shape)?
         } else {
-            vec![Vector3::zeros()]
+            smallvec![Vector3::zeros()]
         };
         let (p0, q0) = (moving.motion.pose_at(0.0), target.motion.pose_at(0.0));
         let scale = p0
@@ -455,11 +456,16 @@ impl MeshOverlap {
 /// point).
 const MAX_CORE_POINTS: usize = 32;
 
+/// The points of a shape's core ([`core_points`]), on the stack up to a
+/// box's eight corners: a touching pair's bounds ask for them on every
+/// check, and on the heap they cost as much as the bound.
+type CorePoints = SmallVec<[Vector3<f64>; 8]>;
+
 /// Points whose convex hull is the shape's core (the shape less its
 /// rounding), in its frame: a ball's centre, a capsule's or segment's
 /// ends, a box's corners, a triangle's or hull's vertices; `None` for
 /// curved cores (cylinders, cones), half-spaces and composite shapes.
-fn core_points(shape: &dyn Shape) -> Option<Vec<Vector3<f64>>> {
+fn core_points(shape: &dyn Shape) -> Option<CorePoints> {
     use TypedShape as T;
     let f = |v: &Vector| Vector3::new(v.x as f64, v.y as f64, v.z as f64);
     let corners = |h: &Vector| {
@@ -474,16 +480,16 @@ fn core_points(shape: &dyn Shape) -> Option<Vec<Vector3<f64>>> {
             })
             .collect()
     };
-    let points: Vec<Vector3<f64>> = match shape.as_typed_shape() {
-        T::Ball(_) => vec![Vector3::zeros()],
-        T::Capsule(c) => vec![f(&c.segment.a), f(&c.segment.b)],
-        T::Segment(s) => vec![f(&s.a), f(&s.b)],
+    let points: CorePoints = match shape.as_typed_shape() {
+        T::Ball(_) => smallvec![Vector3::zeros()],
+        T::Capsule(c) => smallvec![f(&c.segment.a), f(&c.segment.b)],
+        T::Segment(s) => smallvec![f(&s.a), f(&s.b)],
         T::Cuboid(c) => corners(&c.half_extents),
         T::RoundCuboid(r) => corners(&r.inner_shape.half_extents),
-        T::Triangle(t) => vec![f(&t.a), f(&t.b), f(&t.c)],
+        T::Triangle(t) => smallvec![f(&t.a), f(&t.b), f(&t.c)],
         T::RoundTriangle(r) => {
             let t = &r.inner_shape;
-            vec![f(&t.a), f(&t.b), f(&t.c)]
+            smallvec![f(&t.a), f(&t.b), f(&t.c)]
         }
         T::ConvexPolyhedron(p) => p.points().iter().map(f).collect(),
         T::RoundConvexPolyhedron(r) => r.inner_shape.points().iter().map(f).collect(),
