@@ -4,7 +4,7 @@
 //! pusher's front holds, which it has seen); std's default SipHash, made to
 //! resist crafted keys, cost more than the work around it (some 3 % of the
 //! instructions of a kinematic-push scene). foldhash's fixed-seed hasher is
-//! the one rapier's own maps use: fast on integer keys, and the same
+//! the one parry's own maps use: fast on integer keys, and the same
 //! iteration order on every run.
 
 use foldhash::fast::FixedState;

@@ -1282,13 +1282,17 @@ mod tests {
         assert!(proved > 20, "only {proved} of {touching} proved");
     }
 
-    /// Throw `k` of `shape` (a ball or a capsule) at a box of half-extents
-    /// 0.1 × 1 × 1 m at the origin, spinning at up to 100 rad/s: half of
-    /// them head on from up to 1 m away, half glancing from a few
-    /// centimetres (slowly into the wall, fast along it: their stops come
-    /// late after the contact). With it, the time of its true contact with
-    /// the box (`None` where it misses).
-    fn thrown_at_the_wall(k: u32, shape: &dyn Shape) -> Option<(Motion, f64)> {
+    /// Throw `k` of `shape` (a ball or a capsule) at `wall` (a box of
+    /// half-extents 0.1 × 1 × 1 m, fixed at the origin), spinning at up to
+    /// 100 rad/s: half of them head on from up to 1 m away, half glancing
+    /// from a few centimetres (slowly into the wall, fast along it: their
+    /// stops come late after the contact). The thrown shape and the wall,
+    /// with the time of their true contact (`None` where it misses).
+    fn thrown_at_the_wall<'a>(
+        k: u32,
+        shape: &'a dyn Shape,
+        wall: &'a Cuboid,
+    ) -> Option<(ShapeMotion<'a>, ShapeMotion<'a>, f64)> {
         let f = |i: u32| ((k * 7919 + i * 104_729) % 1000) as f64 / 1000.0;
         let turn = Vector3::new(f(4), f(5), f(6)) * 3.0;
         let glancing = k % 4 >= 2;
@@ -1317,7 +1321,6 @@ mod tests {
             1.0 / 60.0,
         )
         .unwrap();
-        let wall = Cuboid::new(Vector::new(0.1, 1.0, 1.0));
         let touch = QueryOptions {
             skin: 0.0,
             ..QueryOptions::default()
@@ -1325,13 +1328,18 @@ mod tests {
         let contact = search::one(
             shape,
             &motion,
-            &wall,
+            wall,
             &fixed(),
             &touch,
             &mut CcdReport::default(),
         )
         .unwrap()?;
-        (contact.status == RootStatus::Hit).then_some((motion, contact.fraction))
+        let moving = ShapeMotion { shape, motion };
+        let target = ShapeMotion {
+            shape: wall,
+            motion: fixed(),
+        };
+        (contact.status == RootStatus::Hit).then_some((moving, target, contact.fraction))
     }
 
     /// A stop searched only as finely in time as parry's tolerance asks
@@ -1364,13 +1372,8 @@ mod tests {
                     0.08,
                 )
             };
-            let Some((motion, contact)) = thrown_at_the_wall(k, shape) else {
+            let Some((moving, target, contact)) = thrown_at_the_wall(k, shape, &wall) else {
                 continue;
-            };
-            let moving = ShapeMotion { shape, motion };
-            let target = ShapeMotion {
-                shape: &wall,
-                motion: fixed(),
             };
             let mut report = CcdReport::default();
             let stop = |tolerance: f64, report: &mut CcdReport| {
@@ -1397,7 +1400,7 @@ mod tests {
             );
             // How deep the pair is at the coarse stop: the radius less the
             // core's distance from the wall.
-            let pose = motion.pose_at(coarse);
+            let pose = moving.motion.pose_at(coarse);
             let core =
                 [pose * Point3::from(ends[0]), pose * Point3::from(ends[1])].map(|p| p.coords);
             let (on_core, on_box) = crate::gap::segment_box(&core, &half);
@@ -1435,13 +1438,8 @@ mod tests {
         let (mut stopped, mut compared) = (0, 0);
         for k in 0..400 {
             let shape = shapes[k as usize % 2];
-            let Some((motion, contact)) = thrown_at_the_wall(k, shape) else {
+            let Some((moving, target, contact)) = thrown_at_the_wall(k, shape, &wall) else {
                 continue;
-            };
-            let moving = ShapeMotion { shape, motion };
-            let target = ShapeMotion {
-                shape: &wall,
-                motion: fixed(),
             };
             let mut report = CcdReport::default();
             compared += 1;
