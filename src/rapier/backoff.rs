@@ -236,12 +236,19 @@ fn core(shape: &dyn Shape) -> Option<(SharedShape, f64)> {
 /// it moves when the frame turns, metres. A ball centred on its frame turns
 /// into itself (only its centre's motion moves it): 0, so a rolling ball
 /// counts as moving no more than its centre does.
+/// One dispatch on the shape's type (each pair asks for both shapes'
+/// reaches several times a sweep): a box's bounding sphere is centred on
+/// it, its radius the half extents' length, which is what parry's sphere
+/// gives here.
 fn reach(shape: &dyn Shape) -> f64 {
-    if shape.as_ball().is_some() {
-        return 0.0;
+    match shape.as_typed_shape() {
+        TypedShape::Ball(_) => 0.0,
+        TypedShape::Cuboid(cuboid) => cuboid.half_extents.length() as f64,
+        _ => {
+            let b = shape.compute_local_bounding_sphere();
+            b.center.length() as f64 + b.radius as f64
+        }
     }
-    let b = shape.compute_local_bounding_sphere();
-    b.center.length() as f64 + b.radius as f64
 }
 
 /// Bound on how far the pair's points move relative to each other over the
