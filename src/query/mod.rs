@@ -134,6 +134,35 @@ pub struct ShapeMotion<'a> {
     pub motion: Motion,
 }
 
+/// The earliest impact among many pairs before its witness is read: the
+/// search's outcome (the time and status) and which pair it was. The
+/// witness, parry's contact at that time, costs a few thousand
+/// instructions, and a caller that reads only the time (a ball's or
+/// capsule's contact, whose stop is searched next) need not pay for it.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Found {
+    pub outcome: SolveOutcome,
+    /// Index into the `moving` slice.
+    pub moving: usize,
+    /// Index into the `targets` slice.
+    pub target: usize,
+    skin: f64,
+}
+
+impl Found {
+    /// The hit with its witness, from the pair the search was given.
+    pub fn toi(&self, moving: &ShapeMotion, target: &ShapeMotion) -> Toi {
+        contact::describe(
+            &self.outcome,
+            self.skin,
+            moving.shape,
+            &moving.motion,
+            target.shape,
+            &target.motion,
+        )
+    }
+}
+
 /// The earliest impact among many pairs, and which pair it was.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ManyToi {
@@ -245,6 +274,21 @@ impl Query {
         targets: &[ShapeMotion],
         options: &QueryOptions,
     ) -> Result<Option<ManyToi>, CcdError> {
+        Ok(self.found(moving, targets, options)?.map(|hit| ManyToi {
+            toi: hit.toi(&moving[hit.moving], &targets[hit.target]),
+            moving: hit.moving,
+            target: hit.target,
+        }))
+    }
+
+    /// [`Query::many`] without the hit's witness: read it with
+    /// [`Found::toi`] where it is needed.
+    pub(crate) fn found(
+        &mut self,
+        moving: &[ShapeMotion],
+        targets: &[ShapeMotion],
+        options: &QueryOptions,
+    ) -> Result<Option<Found>, CcdError> {
         self.spent = SolveStats::default();
         let solve_options = options.solve_options()?;
         // Built before the advancement, so that a pair the crate cannot
@@ -300,21 +344,11 @@ impl Query {
             advances,
             ..outcome.stats
         };
-        let Some((i, j)) = hit else {
-            return Ok(None);
-        };
-        let toi = contact::describe(
-            &outcome,
-            options.skin,
-            moving[i].shape,
-            &moving[i].motion,
-            targets[j].shape,
-            &targets[j].motion,
-        );
-        Ok(Some(ManyToi {
-            toi,
+        Ok(hit.map(|(i, j)| Found {
+            outcome,
             moving: i,
             target: j,
+            skin: options.skin,
         }))
     }
 

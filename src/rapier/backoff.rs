@@ -546,10 +546,15 @@ pub(crate) enum Stop {
 /// contact at it, backed off, unless it cannot move `sink` after it (a
 /// slow landing, which rapier's contacts resolve as without CCD); at the
 /// search's conservative time when its budget ran out.
+///
+/// `contact` is the contact's time and status; `described` gives it with
+/// its witness, which only a stop at or before the contact reads.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn stop_after_contact(
     moving: &ShapeMotion,
     target: &ShapeMotion,
-    contact: Toi,
+    contact: (f64, RootStatus),
+    described: impl FnOnce() -> Toi,
     until: f64,
     rules: &HandBack,
     opts: &QueryOptions,
@@ -557,28 +562,30 @@ pub(crate) fn stop_after_contact(
 ) -> Result<Stop, CcdError> {
     let (s1, m1, s2, m2) = (moving.shape, &moving.motion, target.shape, &target.motion);
     let lo = opts.time_range.lo;
+    let (fraction, status) = contact;
     let travel = pair_travel(s1, m1, s2, m2);
     let stop_gap = rules.stop_gap(moving, target);
-    let hit = contact.status == RootStatus::Hit;
+    let hit = status == RootStatus::Hit;
     // No point of the pair moves farther than this after the contact.
-    let after = travel * (opts.time_range.hi - contact.fraction).max(0.0);
+    let after = travel * (opts.time_range.hi - fraction).max(0.0);
     if hit && stop_gap <= 0.0 && after <= rules.sink {
         return Ok(Stop::Contacts);
     }
-    let backed = back_off(contact, travel, BACKOFF * opts.skin, lo);
+    let backed = |contact| back_off(contact, travel, BACKOFF * opts.skin, lo);
     if !hit || stop_gap == 0.0 {
-        return Ok(Stop::Before(backed));
+        return Ok(Stop::Before(backed(described())));
     }
     if stop_gap > 0.0 {
         // At the contact when the pair starts about that close (rapier's
         // CCD would leave it to the contacts): the sound stand-in.
+        let contact = described();
         let before = stop_before_gap(moving, target, contact, lo, stop_gap, rules.slop);
-        return Ok(Stop::Before(before.unwrap_or(backed)));
+        return Ok(Stop::Before(before.unwrap_or_else(|| backed(contact))));
     }
     let deep = stop_when_deep(
         moving,
         target,
-        contact.fraction,
+        fraction,
         until,
         -stop_gap,
         rules.sweep_tolerance(),
@@ -1615,8 +1622,18 @@ mod tests {
             .unwrap()
             {
                 Some(toi) if toi.status == RootStatus::Hit => {
-                    match stop_after_contact(&moving, &target, toi, 1.0, &rules, &opts, &mut report)
-                        .unwrap()
+                    let contact = (toi.fraction, toi.status);
+                    match stop_after_contact(
+                        &moving,
+                        &target,
+                        contact,
+                        || toi,
+                        1.0,
+                        &rules,
+                        &opts,
+                        &mut report,
+                    )
+                    .unwrap()
                     {
                         Stop::After(stop) => Some(stop.fraction),
                         Stop::Contacts => None,

@@ -5,7 +5,7 @@
 use super::report::CcdReport;
 use crate::error::CcdError;
 use crate::motion::Motion;
-use crate::query::{ManyToi, QueryOptions, ShapeMotion, Toi, with_query};
+use crate::query::{Found, ManyToi, QueryOptions, ShapeMotion, Toi, with_query};
 use rapier3d::parry::shape::Shape;
 
 /// [`crate::query::time_of_impact`], counted. Both run on the thread's
@@ -35,6 +35,20 @@ pub(crate) fn many(
 ) -> Result<Option<ManyToi>, CcdError> {
     with_query(|query| {
         let found = query.many(moving, targets, opts);
+        report.evaluations += query.spent().pair_evaluations;
+        found
+    })
+}
+
+/// [`crate::query::Query::found`], counted: the hit without its witness.
+pub(crate) fn found(
+    moving: &[ShapeMotion],
+    targets: &[ShapeMotion],
+    opts: &QueryOptions,
+    report: &mut CcdReport,
+) -> Result<Option<Found>, CcdError> {
+    with_query(|query| {
+        let found = query.found(moving, targets, opts);
         report.evaluations += query.spent().pair_evaluations;
         found
     })

@@ -508,13 +508,14 @@ fn earliest_piece(
                 motion: targets[j].motion,
             })
             .collect();
-        let found = search::many(std::slice::from_ref(moving), &set, &contact, report)?;
-        let Some(many) = found else { break };
-        let j = alive[many.target];
+        let found = search::found(std::slice::from_ref(moving), &set, &contact, report)?;
+        let Some(hit) = found else { break };
+        let j = alive[hit.target];
         let t = &targets[j];
-        if many.toi.status == RootStatus::InitiallyTouching {
+        let status = hit.outcome.status;
+        if status == RootStatus::InitiallyTouching {
             // The pair touches at the start after all (parry saw it apart).
-            alive.remove(many.target);
+            alive.remove(hit.target);
             let Some(start) = start_gap(t, reach) else {
                 continue;
             };
@@ -528,7 +529,9 @@ fn earliest_piece(
             target: j,
             touching: false,
         };
-        match stop_after_contact(moving, t, many.toi, until, rules, opts, report)? {
+        let contact = (hit.outcome.time, status);
+        let described = || hit.toi(moving, &set[hit.target]);
+        match stop_after_contact(moving, t, contact, described, until, rules, opts, report)? {
             // At or before the contact: the earliest stop of all.
             Stop::Before(toi) => {
                 keep(found(toi));
@@ -536,13 +539,13 @@ fn earliest_piece(
             }
             // After it: other pairs may still meet before.
             Stop::After(toi) => {
-                alive.remove(many.target);
+                alive.remove(hit.target);
                 until = toi.fraction;
                 keep(found(toi));
             }
             Stop::Contacts => {
                 report.shallow_contacts += 1;
-                alive.remove(many.target);
+                alive.remove(hit.target);
             }
         }
     }
