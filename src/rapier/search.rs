@@ -26,18 +26,19 @@ pub(crate) fn one(
     })
 }
 
-/// [`crate::query::time_of_impact_many`], counted.
+/// [`crate::query::time_of_impact_many`], counted: [`found`] and the
+/// hit's witness.
 pub(crate) fn many(
     moving: &[ShapeMotion],
     targets: &[ShapeMotion],
     opts: &QueryOptions,
     report: &mut CcdReport,
 ) -> Result<Option<ManyToi>, CcdError> {
-    with_query(|query| {
-        let found = query.many(moving, targets, opts);
-        report.evaluations += query.spent().pair_evaluations;
-        found
-    })
+    Ok(found(moving, targets, opts, report)?.map(|hit| ManyToi {
+        toi: hit.toi(&moving[hit.moving], &targets[hit.target]),
+        moving: hit.moving,
+        target: hit.target,
+    }))
 }
 
 /// [`crate::query::Query::found`], counted: the hit without its witness.
