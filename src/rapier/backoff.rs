@@ -236,6 +236,7 @@ fn core(shape: &dyn Shape) -> Option<(SharedShape, f64)> {
 /// it moves when the frame turns, metres. A ball centred on its frame turns
 /// into itself (only its centre's motion moves it): 0, so a rolling ball
 /// counts as moving no more than its centre does.
+///
 /// One dispatch on the shape's type (each pair asks for both shapes'
 /// reaches several times a sweep): a box's bounding sphere is centred on
 /// it, its radius the half extents' length, which is what parry's sphere
