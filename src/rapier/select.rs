@@ -183,7 +183,7 @@ pub(crate) fn body_thickness(rb: &RigidBody, colliders: &ColliderSet) -> f64 {
 /// (no walk over the colliders for it; rapier's step has just brought it
 /// up to date with any collider the user changed). Only a body that bound
 /// cannot clear gets the exact test, whose answer is then the one returned,
-/// with the short angle it computed (for the body's `travel`).
+/// with what it measured (for the body's `travel`).
 fn tunnels(
     rb: &RigidBody,
     colliders: &ColliderSet,
@@ -192,7 +192,7 @@ fn tunnels(
     dt: f64,
     horizon: f64,
     fast_factor: f64,
-) -> (bool, Option<(f64, f64)>) {
+) -> (bool, Option<Measured>) {
     let com = rb.local_center_of_mass();
     let (linvel, angvel) = (rb.linvel().length() as f64, rb.angvel().length() as f64);
     let spin = angvel * dt;
@@ -220,17 +220,32 @@ fn tunnels(
     // Not `max`, which would drop a NaN: a body in a non-finite state
     // counts as fast, and the records' pass reports it.
     let slow = arc <= allowed && by_velocity <= allowed;
-    (!slow, Some((short, extent)))
+    let measured = Measured {
+        short,
+        extent,
+        shift,
+    };
+    (!slow, Some(measured))
+}
+
+/// What the exact test of [`tunnels`] measured of a body's motion: its
+/// short angle, turning extent and centre of mass's shift, which its
+/// record's travel is bounded from.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Measured {
+    short: f64,
+    extent: f64,
+    shift: f64,
 }
 
 /// A moved body as the first pass of [`moved`] saw it: its index in the
-/// starts, whether it may tunnel, and its short angle and turning extent
-/// if the exact test computed them.
+/// starts, whether it may tunnel, and what the exact test measured if it
+/// ran.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Seen {
     start: u32,
     tunnels: bool,
-    exact: Option<(f64, f64)>,
+    exact: Option<Measured>,
 }
 
 /// The bodies of `starts` that moved during `dt` seconds, each marked fast
@@ -298,16 +313,22 @@ pub(crate) fn moved(
             continue;
         }
         let end = *end;
-        let com = rb.local_center_of_mass();
-        let shift = (end * com - start.pose * com).length() as f64;
         let spin = rb.angvel().length() as f64 * dt;
         // A body the cheap bound cleared gets the same kind of bound on its
         // travel: rapier's reach for the turning extent, and `π·|sin(θ/2)|`
         // for the short angle (no atan2, no walk over the colliders).
-        let (short, extent) = s.exact.unwrap_or_else(|| {
+        let Measured {
+            short,
+            extent,
+            shift,
+        } = s.exact.unwrap_or_else(|| {
+            let com = rb.local_center_of_mass();
             let sine = half_angle_sine(&start.pose, &end).min(1.0);
-            let reach = rb.mass_properties().max_extent() as f64;
-            ((PI * sine) * (1.0 + 1.0e-6), reach)
+            Measured {
+                short: (PI * sine) * (1.0 + 1.0e-6),
+                extent: rb.mass_properties().max_extent() as f64,
+                shift: (end * com - start.pose * com).length() as f64,
+            }
         });
         out.push(Moved {
             handle: start.handle,
