@@ -144,8 +144,9 @@ pub(crate) fn turning_extent(rb: &RigidBody, colliders: &ColliderSet) -> f64 {
         if !co.is_enabled() {
             continue;
         }
-        match (co.shape().as_ball(), co.position_wrt_parent()) {
-            (Some(_), Some(local)) => {
+        // One dispatch on the shape's type (`as_ball` takes two).
+        match (co.shape().as_typed_shape(), co.position_wrt_parent()) {
+            (TypedShape::Ball(_), Some(local)) => {
                 extent = extent.max((local.translation - com).length() as f64);
             }
             _ => return rb.mass_properties().max_extent() as f64,
