@@ -103,7 +103,6 @@ pub(super) fn touching_pair(
     });
     let allowed = rules.allowed_depth(gap0, driven, moving, target);
     let (lo, hi) = (span.lo, span.hi);
-    let travel = pair_travel(s1, m1, s2, m2);
     // The pair's points move too little relative to each other to get
     // deeper than allowed: nothing to do. (parry's depth of a convex pair,
     // or of each convex part of a composite one, is the distance of the
@@ -112,6 +111,7 @@ pub(super) fn touching_pair(
     if pair_relative_travel(s1, m1, s2, m2) <= allowed + gap0 {
         return Ok(None);
     }
+    let travel = pair_travel(s1, m1, s2, m2);
     // Against a convex target parry's depth is one least translation, so
     // bounds along a fixed direction bound it.
     let convex = is_convex(s2);
