@@ -233,7 +233,7 @@ fn tunnels(
 /// short angle, turning extent and centre of mass's shift, which its
 /// record's travel is bounded from.
 #[derive(Clone, Copy, Debug)]
-pub(crate) struct Measured {
+struct Measured {
     short: f64,
     extent: f64,
     shift: f64,
