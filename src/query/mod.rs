@@ -150,6 +150,16 @@ pub(crate) struct Found {
 }
 
 impl Found {
+    /// The hit with its witness, as [`Query::many`] reports it, from the
+    /// slices the search was given.
+    pub fn described(&self, moving: &[ShapeMotion], targets: &[ShapeMotion]) -> ManyToi {
+        ManyToi {
+            toi: self.toi(&moving[self.moving], &targets[self.target]),
+            moving: self.moving,
+            target: self.target,
+        }
+    }
+
     /// The hit with its witness, from the pair the search was given.
     pub fn toi(&self, moving: &ShapeMotion, target: &ShapeMotion) -> Toi {
         contact::describe(
@@ -274,11 +284,9 @@ impl Query {
         targets: &[ShapeMotion],
         options: &QueryOptions,
     ) -> Result<Option<ManyToi>, CcdError> {
-        Ok(self.found(moving, targets, options)?.map(|hit| ManyToi {
-            toi: hit.toi(&moving[hit.moving], &targets[hit.target]),
-            moving: hit.moving,
-            target: hit.target,
-        }))
+        Ok(self
+            .found(moving, targets, options)?
+            .map(|hit| hit.described(moving, targets)))
     }
 
     /// [`Query::many`] without the hit's witness: read it with

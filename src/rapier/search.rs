@@ -34,11 +34,7 @@ pub(crate) fn many(
     opts: &QueryOptions,
     report: &mut CcdReport,
 ) -> Result<Option<ManyToi>, CcdError> {
-    Ok(found(moving, targets, opts, report)?.map(|hit| ManyToi {
-        toi: hit.toi(&moving[hit.moving], &targets[hit.target]),
-        moving: hit.moving,
-        target: hit.target,
-    }))
+    Ok(found(moving, targets, opts, report)?.map(|hit| hit.described(moving, targets)))
 }
 
 /// [`crate::query::Query::found`], counted: the hit without its witness.
