@@ -364,6 +364,52 @@ fn print_profile(reports: &[SceneReport]) {
             per(ms)
         );
     }
+    print_families(reports);
+}
+
+/// The same runs' pair evaluations per step by what each was spent on:
+/// the ball families together (a few dozen operations each), the box and
+/// triangle families (13-15 separating axes), the support-map pairs
+/// (capsules, cylinders, cones, hulls; adaptive axes), a composite's
+/// bounding boxes on the way down its tree, and the shortcuts that settled
+/// a pair before its family was asked.
+fn print_families(reports: &[SceneReport]) {
+    use affine_ccd::query::Family;
+    let columns: [(&str, &[Family]); 8] = [
+        (
+            "balls",
+            &[
+                Family::BallBall,
+                Family::BallTriangle,
+                Family::BallSegment,
+                Family::BallCuboid,
+            ],
+        ),
+        ("tri-tri", &[Family::TriangleTriangle]),
+        ("box-box", &[Family::CuboidCuboid]),
+        ("box-tri", &[Family::CuboidTriangle]),
+        ("half-sp", &[Family::HalfSpace]),
+        ("support", &[Family::SupportMap]),
+        ("compos", &[Family::Composite]),
+        ("shortcut", &[Family::Shortcut]),
+    ];
+    println!();
+    print!("{:<26}", "evaluations per step");
+    for (name, _) in &columns {
+        print!(" {name:>8}");
+    }
+    println!();
+    for r in reports.iter().filter(|r| r.backend == Backend::Affine) {
+        let Some(p) = r.profile else {
+            continue;
+        };
+        print!("{:<26}", r.scene);
+        for (_, families) in &columns {
+            let count: u64 = families.iter().map(|&f| p.families.get(f)).sum();
+            print!(" {:>8.1}", count as f64 / p.steps.max(1) as f64);
+        }
+        println!();
+    }
 }
 
 fn to_json(reports: &[SceneReport]) -> String {

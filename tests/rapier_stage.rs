@@ -106,6 +106,33 @@ fn a_cuboid_at_200_m_s_stops_at_a_thin_wall() {
     wall_scenario("cuboid", ColliderBuilder::cuboid(0.25, 0.25, 0.25));
 }
 
+/// The stage's report counts each pair evaluation once by family: the
+/// counts add up to its evaluations, and a box fired at a box wall spends
+/// them on the box family (or shortcuts) in the step it is clamped in.
+#[test]
+fn the_report_counts_evaluations_by_family() {
+    use affine_ccd::query::Family;
+    let (mut run, _, _) =
+        projectile_and_wall(Ccd::Affine, ColliderBuilder::cuboid(0.25, 0.25, 0.25));
+    let mut clamped = 0;
+    for _ in 0..STEPS {
+        run.step();
+        let report = run.stage.as_ref().unwrap().report();
+        let by = report.evaluations_by_family;
+        assert_eq!(by.total(), report.evaluations, "{by:?}");
+        if report.clamps() > 0 {
+            clamped += 1;
+            assert!(by.get(Family::CuboidCuboid) > 0, "{by:?}");
+            assert_eq!(
+                by.get(Family::CuboidCuboid) + by.get(Family::Shortcut),
+                report.evaluations,
+                "{by:?}"
+            );
+        }
+    }
+    assert!(clamped > 0, "the box was never clamped");
+}
+
 #[test]
 fn a_cone_at_200_m_s_stops_at_a_thin_wall() {
     let rapier_tunnels = wall_scenario(

@@ -9,6 +9,7 @@
 //! - `affine`: this crate's stage, [`affine_ccd::rapier::AffineCcd`], installed
 //!   into the world (its dispatcher in, rapier's CCD off).
 
+use affine_ccd::query::FamilyEvaluations;
 use rapier3d::prelude::PhysicsWorld;
 use std::fmt;
 use std::str::FromStr;
@@ -101,6 +102,9 @@ pub struct StageProfile {
     pub shallow: usize,
     /// Pair evaluations the queries spent.
     pub evaluations: u64,
+    /// The same by what each was spent on (gap family, composite bounding
+    /// box or shortcut).
+    pub families: FamilyEvaluations,
     /// Bodies clamped.
     pub clamps: usize,
 }
@@ -113,6 +117,7 @@ impl StageProfile {
         self.touching += r.pairs_touching_at_start;
         self.shallow += r.shallow_contacts;
         self.evaluations += r.evaluations;
+        self.families += r.evaluations_by_family;
         self.clamps += r.clamps();
     }
 }

@@ -32,12 +32,14 @@ mod contact;
 mod frames;
 mod pairs;
 mod primitives;
+mod profile;
 mod sat;
 
 pub(crate) use contact::{Settle, StartContact, Witness, contact, contact_settled, start_contact};
 #[cfg(test)]
 pub(crate) use contact::{cross_mesh, floors, grid};
 pub use primitives::{PrimitiveToi, edge_edge_toi, vertex_face_toi};
+pub use profile::{Family, FamilyEvaluations};
 
 use crate::enclosure::{Arithmetic, TimeSpan};
 use crate::error::{CcdError, check_finite};
@@ -48,7 +50,7 @@ use crate::solve::{InitialContact, RootStatus, SolveOptions, SolveOutcome, Solve
 use balls::Balls;
 use frames::{FrameBuffers, FrameDef};
 use nalgebra::{Point3, Vector3};
-use pairs::{CompositePair, PairContent, PairEntry, Search};
+use pairs::{CompositePair, PairContent, PairEntry, Search, Searched};
 use rapier3d::parry::shape::Shape;
 
 /// How a query searches.
@@ -244,6 +246,8 @@ pub struct Query {
     frames: FrameBuffers,
     /// What the last search spent, hit or miss.
     spent: SolveStats,
+    /// The same search's pair evaluations, by family.
+    spent_by_family: FamilyEvaluations,
 }
 
 impl Query {
@@ -277,6 +281,13 @@ impl Query {
         self.spent
     }
 
+    /// The pair evaluations of the last [`Query::many`] (or [`Query::one`])
+    /// by what each was spent on; they add up to
+    /// [`spent`](Query::spent)`().pair_evaluations`.
+    pub fn spent_by_family(&self) -> FamilyEvaluations {
+        self.spent_by_family
+    }
+
     /// [`time_of_impact_many`] with this context's buffers.
     pub fn many(
         &mut self,
@@ -298,6 +309,7 @@ impl Query {
         options: &QueryOptions,
     ) -> Result<Option<Found>, CcdError> {
         self.spent = SolveStats::default();
+        self.spent_by_family = FamilyEvaluations::default();
         let solve_options = options.solve_options()?;
         // Built before the advancement, so that a pair the crate cannot
         // search is an error whatever the advancement finds.
@@ -333,7 +345,12 @@ impl Query {
             start_apart: start > span.lo,
             ..solve_options
         };
-        let (mut outcome, mut hit) = self.search(moving, targets, pairs, options, &first)?;
+        let Searched {
+            mut outcome,
+            mut hit,
+            evaluated,
+        } = self.search(moving, targets, pairs, options, &first)?;
+        self.spent_by_family = evaluated;
         if hit.is_none() && touch_by < span.hi {
             // The overlap at `touch_by` (GJK's, in `f64`) should have left
             // a touch in the first part; should rounding have misled it,
@@ -345,8 +362,10 @@ impl Query {
             };
             let pairs = pairs_of(moving, targets, options.skin)?;
             let stats = outcome.stats;
-            (outcome, hit) = self.search(moving, targets, pairs, options, &rest)?;
+            let rest = self.search(moving, targets, pairs, options, &rest)?;
+            (outcome, hit) = (rest.outcome, rest.hit);
             outcome.stats += stats;
+            self.spent_by_family += rest.evaluated;
         }
         self.spent = SolveStats {
             advances,
@@ -360,8 +379,9 @@ impl Query {
         }))
     }
 
-    /// One search of `pairs` over `solve_options.span`: its outcome and
-    /// the (moving, target) indices of the pair that may touch.
+    /// One search of `pairs` over `solve_options.span`: its outcome, the
+    /// (moving, target) indices of the pair that may touch, and its
+    /// evaluations by family.
     fn search<'s>(
         &mut self,
         moving: &[ShapeMotion],
@@ -369,7 +389,7 @@ impl Query {
         pairs: Vec<PairEntry<'s>>,
         options: &QueryOptions,
         solve_options: &SolveOptions,
-    ) -> Result<(SolveOutcome, Option<(usize, usize)>), CcdError> {
+    ) -> Result<Searched, CcdError> {
         let frames = &mut self.frames;
         frames.defs.clear();
         frames

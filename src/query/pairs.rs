@@ -2,6 +2,7 @@
 
 use super::balls::Balls;
 use super::frames::{FrameBuffers, Frames};
+use super::profile::{Family, FamilyEvaluations};
 use crate::convert::glam_from_vec;
 use crate::enclosure::Interval;
 use crate::enclosure::{Enclosure, InArithmetic, TimeSpan};
@@ -13,8 +14,7 @@ use crate::solve::{GapSet, SolveOptions, SolveOutcome, Solver};
 use rapier3d::parry::shape::Shape;
 
 /// One search over a query's pairs, in whichever arithmetic the query
-/// chose: the outcome and the caller's (moving, target) indices of the pair
-/// that may touch. A gap that could not be built mid-search (a piece with
+/// chose ([`Searched`]). A gap that could not be built mid-search (a piece with
 /// bad parameters) is reported as its error after the search.
 pub(super) struct Search<'a, 's> {
     pub solver: &'a mut Solver,
@@ -26,8 +26,17 @@ pub(super) struct Search<'a, 's> {
     pub options: &'a SolveOptions,
 }
 
+/// What one [`Search`] found and spent.
+pub(super) struct Searched {
+    pub outcome: SolveOutcome,
+    /// The caller's (moving, target) indices of the pair that may touch.
+    pub hit: Option<(usize, usize)>,
+    /// The pair evaluations, by family (the solver's stats count them all).
+    pub evaluated: FamilyEvaluations,
+}
+
 impl InArithmetic for Search<'_, '_> {
-    type Output = Result<(SolveOutcome, Option<(usize, usize)>), CcdError>;
+    type Output = Result<Searched, CcdError>;
 
     fn run<E: Enclosure>(self) -> Self::Output {
         let Search {
@@ -73,6 +82,7 @@ impl InArithmetic for Search<'_, '_> {
             sweeps: Vec::new(),
             carried: Vec::new(),
             prepared: Vec::new(),
+            evaluated: FamilyEvaluations::default(),
             error: None,
         };
         let outcome = solver.solve(&mut set, options);
@@ -84,7 +94,11 @@ impl InArithmetic for Search<'_, '_> {
         let hit = outcome
             .pair
             .map(|p| (set.pairs[p].moving as usize, set.pairs[p].target as usize));
-        Ok((outcome, hit))
+        Ok(Searched {
+            outcome,
+            hit,
+            evaluated: set.evaluated,
+        })
     }
 }
 
@@ -300,6 +314,8 @@ struct PairSet<'s, E: Enclosure> {
     /// ([`gap::Prepared`]), by the shape's address (the shapes are borrowed
     /// for the whole query, so an address names one shape).
     prepared: Vec<(usize, Option<gap::Prepared>)>,
+    /// The evaluations so far, by what each was spent on.
+    evaluated: FamilyEvaluations,
     error: Option<CcdError>,
 }
 
@@ -444,6 +460,7 @@ impl<E: Enclosure> GapSet<E> for PairSet<'_, E> {
             {
                 let first = (axes.trailing_zeros() as usize).min(out.len() - 1);
                 out[first] = E::constant(f64::MAX);
+                self.evaluated.count(Family::Shortcut);
                 return;
             }
             // Still within reach: retested only on a node narrower again.
@@ -468,6 +485,7 @@ impl<E: Enclosure> GapSet<E> for PairSet<'_, E> {
                     && first < out.len()
                 {
                     out[first] = E::constant(gap);
+                    self.evaluated.count(Family::Shortcut);
                     return;
                 }
                 // Turned too far over the node for the family to tell
@@ -475,6 +493,7 @@ impl<E: Enclosure> GapSet<E> for PairSet<'_, E> {
                 // known (see `BLIND_TURN`), every alive axis the whole line.
                 if span.hi - span.lo > entry.blind_width {
                     unknown(axes, out);
+                    self.evaluated.count(Family::Shortcut);
                     return;
                 }
                 let (fa, fb) = if *swapped { (fb, fa) } else { (fa, fb) };
@@ -492,8 +511,11 @@ impl<E: Enclosure> GapSet<E> for PairSet<'_, E> {
                     && first < out.len()
                 {
                     out[first] = E::constant(lo);
+                    self.evaluated.count(Family::Shortcut);
                     return;
                 }
+                // From here on the family itself is asked.
+                self.evaluated.count(Family::of(gap));
                 if span.lo == span.hi
                     && gap.eval_at_a_time(
                         span.lo,
@@ -553,8 +575,12 @@ impl<E: Enclosure> GapSet<E> for PairSet<'_, E> {
                     }
                 };
                 composite::bounding_axes(&carried, &big.bounds, self.skin, out);
+                self.evaluated.count(Family::Composite);
             }
-            PairContent::Broken => out[0] = E::zero(),
+            PairContent::Broken => {
+                out[0] = E::zero();
+                self.evaluated.count(Family::Shortcut);
+            }
         }
     }
 

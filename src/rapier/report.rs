@@ -1,5 +1,6 @@
 //! What one step of the CCD stage did: counts, clamps and skipped bodies.
 
+use crate::query::{FamilyEvaluations, Query};
 use rapier3d::prelude::{ColliderHandle, RigidBodyHandle, Vector};
 use std::time::Duration;
 
@@ -52,6 +53,10 @@ pub struct CcdReport {
     pub shallow_contacts: usize,
     /// Pair evaluations the query spent.
     pub evaluations: u64,
+    /// The same evaluations by what each was spent on (which gap family,
+    /// a composite's bounding box, or a shortcut): they add up to
+    /// `evaluations`.
+    pub evaluations_by_family: FamilyEvaluations,
     /// One event per clamped body.
     pub hits: Vec<CcdHitEvent>,
     /// Sensor crossings inside the step reported as Started + Stopped.
@@ -84,6 +89,7 @@ impl CcdReport {
         self.pairs_touching_at_start += piece.pairs_touching_at_start;
         self.shallow_contacts += piece.shallow_contacts;
         self.evaluations += piece.evaluations;
+        self.evaluations_by_family += piece.evaluations_by_family;
         self.sensor_crossings += piece.sensor_crossings;
         // A piece's own report has one piece: its length.
         let (offset, share) = (start / dt, piece.shortest_piece / dt);
@@ -104,6 +110,12 @@ impl CcdReport {
         };
         self.pieces += piece.pieces;
         self.elapsed += piece.elapsed;
+    }
+
+    /// Adds what the last search of `query` spent, hit or miss.
+    pub(crate) fn count(&mut self, query: &Query) {
+        self.evaluations += query.spent().pair_evaluations;
+        self.evaluations_by_family += query.spent_by_family();
     }
 
     /// Back to an empty account, keeping the buffers.

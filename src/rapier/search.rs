@@ -1,6 +1,7 @@
 //! The stage's calls to the time-of-impact query, counted: each adds what
-//! it spent, hit or miss, to the step's report (`CcdReport::evaluations`),
-//! so the profile shows the work of the searches that found nothing too.
+//! it spent, hit or miss, to the step's report (`CcdReport::evaluations`,
+//! and by family), so the profile shows the work of the searches that
+//! found nothing too.
 
 use super::report::CcdReport;
 use crate::error::CcdError;
@@ -21,7 +22,7 @@ pub(crate) fn one(
 ) -> Result<Option<Toi>, CcdError> {
     with_query(|query| {
         let found = query.one(s1, m1, s2, m2, opts);
-        report.evaluations += query.spent().pair_evaluations;
+        report.count(query);
         found
     })
 }
@@ -46,7 +47,7 @@ pub(crate) fn found(
 ) -> Result<Option<Found>, CcdError> {
     with_query(|query| {
         let found = query.found(moving, targets, opts);
-        report.evaluations += query.spent().pair_evaluations;
+        report.count(query);
         found
     })
 }
