@@ -7,6 +7,7 @@ use super::report::CcdReport;
 use crate::error::CcdError;
 use crate::motion::Motion;
 use crate::query::{Found, ManyToi, QueryOptions, ShapeMotion, Toi, with_query};
+use crate::solve::SolveOutcome;
 use rapier3d::parry::shape::Shape;
 
 /// [`crate::query::time_of_impact`], counted. Both run on the thread's
@@ -25,6 +26,28 @@ pub(crate) fn one(
         report.count(query);
         found
     })
+}
+
+/// [`one`] without the hit's witness: its time and status, for a caller
+/// that reads nothing else (the witness is parry's contact at the hit,
+/// some thousands of instructions for two boxes).
+pub(crate) fn one_outcome(
+    s1: &dyn Shape,
+    m1: &Motion,
+    s2: &dyn Shape,
+    m2: &Motion,
+    opts: &QueryOptions,
+    report: &mut CcdReport,
+) -> Result<Option<SolveOutcome>, CcdError> {
+    let moving = [ShapeMotion {
+        shape: s1,
+        motion: *m1,
+    }];
+    let target = [ShapeMotion {
+        shape: s2,
+        motion: *m2,
+    }];
+    Ok(found(&moving, &target, opts, report)?.map(|hit| hit.outcome))
 }
 
 /// [`crate::query::time_of_impact_many`], counted: [`found`] and the

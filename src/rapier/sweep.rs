@@ -638,9 +638,9 @@ pub(crate) fn first_crossing(
         ..*opts
     };
     Ok(
-        search::one(s1, &pair.motion1, s2, &pair.motion2, &opts, report)?
-            .filter(|t| t.status != RootStatus::InitiallyTouching)
-            .map(|t| t.fraction),
+        search::one_outcome(s1, &pair.motion1, s2, &pair.motion2, &opts, report)?
+            .filter(|hit| hit.status != RootStatus::InitiallyTouching)
+            .map(|hit| hit.time),
     )
 }
 

@@ -427,7 +427,7 @@ fn proved_within(
         initial_contact: InitialContact::Report,
         ..*opts
     };
-    match search::one(s1, &m1.shifted(back), s2, m2, &apart, report) {
+    match search::one_outcome(s1, &m1.shifted(back), s2, m2, &apart, report) {
         Ok(None) => true,
         Ok(Some(_)) => false,
         Err(_) => false,
