@@ -92,6 +92,31 @@ impl Family {
 
 /// Pair evaluations by [`Family`]; they add up to the search's
 /// `SolveStats::pair_evaluations`.
+///
+/// ```
+/// use affine_ccd::query::{Family, Query, QueryOptions};
+/// use affine_ccd::Motion;
+/// use nalgebra::{Isometry3, Point3, Vector3};
+/// use rapier3d::parry::shape::Cuboid;
+/// use rapier3d::prelude::Vector;
+///
+/// // A box falling at 20 m/s onto a floor box 0.3 m below it.
+/// let falling = Motion::from_velocities(
+///     Isometry3::translation(0.0, 0.5, 0.0), Point3::new(0.0, 0.5, 0.0),
+///     Vector3::new(0.0, -20.0, 0.0), Vector3::zeros(), 1.0 / 60.0,
+/// ).unwrap();
+/// let floor = Motion::fixed(Isometry3::identity()).unwrap();
+/// let (cube, slab) = (Cuboid::new(Vector::splat(0.1)), Cuboid::new(Vector::new(2.0, 0.1, 2.0)));
+/// let mut query = Query::new();
+/// let hit = query.one(&cube, &falling, &slab, &floor, &QueryOptions::default()).unwrap();
+/// assert!(hit.is_some());
+/// let by_family = query.spent_by_family();
+/// assert_eq!(by_family.total(), query.spent().pair_evaluations);
+/// assert!(by_family.get(Family::CuboidCuboid) > 0);
+/// for (family, count) in by_family.iter().filter(|(_, n)| *n > 0) {
+///     println!("{}: {count}", family.name());
+/// }
+/// ```
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct FamilyEvaluations {
     counts: [u64; Family::ALL.len()],
