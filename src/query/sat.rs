@@ -54,19 +54,55 @@ pub(crate) enum SatAnswer {
 /// A box or a triangle, placed in the first shape's frame.
 #[derive(Clone, Copy, Debug)]
 enum Solid {
-    Box {
-        center: Vector3<f64>,
-        /// Unit axes, as columns.
-        axes: Matrix3<f64>,
-        half: Vector3<f64>,
-    },
+    Box(PlacedBox),
     /// A box in its own frame (the first shape): a `Box` at the origin
     /// with the unit axes, its projections and supports read off the
     /// direction's coordinates, with the same results bit for bit.
-    LocalBox {
-        half: Vector3<f64>,
-    },
-    Triangle([Vector3<f64>; 3]),
+    LocalBox(LocalBox),
+    Triangle(Triangle3),
+}
+
+/// A box placed in the first shape's frame.
+#[derive(Clone, Copy, Debug)]
+struct PlacedBox {
+    center: Vector3<f64>,
+    /// Unit axes, as columns.
+    axes: Matrix3<f64>,
+    half: Vector3<f64>,
+}
+
+/// The first shape's box, in its own frame.
+#[derive(Clone, Copy, Debug)]
+struct LocalBox {
+    half: Vector3<f64>,
+}
+
+/// A triangle's corners, placed in the first shape's frame.
+#[derive(Clone, Copy, Debug)]
+struct Triangle3([Vector3<f64>; 3]);
+
+/// What the separating-axis search asks of a box or a triangle. Each kind
+/// answers for itself, and the search is written once over the trait, so
+/// each pair of kinds gets its own copy with the projections inlined
+/// (through the enum each projection was a call and a match on the kind).
+trait Polytope {
+    /// Unit face normals (a box's three axes, a triangle's normal; none
+    /// for a triangle without area).
+    fn faces(&self) -> ([Vector3<f64>; 3], usize);
+
+    /// Edge directions (a box's axes; a triangle's edges, not unit).
+    fn edges(&self) -> [Vector3<f64>; 3];
+
+    /// The shape's extent along the unit direction `n`: `[min, max]`.
+    fn project(&self, n: &Vector3<f64>) -> (f64, f64);
+
+    /// A point of the shape farthest along `n`: where several are (a face
+    /// or an edge square to `n`), their middle.
+    fn support(&self, n: &Vector3<f64>) -> Vector3<f64>;
+
+    /// Edge `k` as a segment (its two ends): for a box, the edge along
+    /// axis `k` farthest along `n`.
+    fn edge(&self, k: usize, n: &Vector3<f64>) -> [Vector3<f64>; 2];
 }
 
 impl Solid {
@@ -74,15 +110,19 @@ impl Solid {
     /// `None` for other shapes.
     fn of(shape: &dyn Shape, rotation: &Matrix3<f64>, translation: &Vector3<f64>) -> Option<Solid> {
         if let Some(c) = shape.as_cuboid() {
-            return Some(Solid::Box {
+            return Some(Solid::Box(PlacedBox {
                 center: *translation,
                 axes: *rotation,
                 half: vec_from_glam(c.half_extents),
-            });
+            }));
         }
         let t = shape.as_triangle()?;
         let place = |v| rotation * vec_from_glam(v) + translation;
-        Some(Solid::Triangle([place(t.a), place(t.b), place(t.c)]))
+        Some(Solid::Triangle(Triangle3([
+            place(t.a),
+            place(t.b),
+            place(t.c),
+        ])))
     }
 
     /// The first shape, in its own frame: what [`Solid::of`] gives with no
@@ -90,141 +130,198 @@ impl Solid {
     /// coordinates come out `+0` there, as here).
     fn local(shape: &dyn Shape) -> Option<Solid> {
         if let Some(c) = shape.as_cuboid() {
-            return Some(Solid::LocalBox {
+            return Some(Solid::LocalBox(LocalBox {
                 half: vec_from_glam(c.half_extents),
-            });
+            }));
         }
         let t = shape.as_triangle()?;
         let place = |v| vec_from_glam(v).map(|x: f64| x + 0.0);
-        Some(Solid::Triangle([place(t.a), place(t.b), place(t.c)]))
-    }
-
-    /// A local box as the `Box` it stands for.
-    fn as_box(&self) -> Solid {
-        match *self {
-            Solid::LocalBox { half } => Solid::Box {
-                center: Vector3::zeros(),
-                axes: Matrix3::identity(),
-                half,
-            },
-            other => other,
-        }
+        Some(Solid::Triangle(Triangle3([
+            place(t.a),
+            place(t.b),
+            place(t.c),
+        ])))
     }
 
     fn is_finite(&self) -> bool {
         match self {
-            Solid::LocalBox { half } => half.iter().all(|x| x.is_finite()),
-            Solid::Box { center, axes, half } => center
+            Solid::LocalBox(b) => b.half.iter().all(|x| x.is_finite()),
+            Solid::Box(b) => b
+                .center
                 .iter()
-                .chain(axes.iter())
-                .chain(half.iter())
+                .chain(b.axes.iter())
+                .chain(b.half.iter())
                 .all(|x| x.is_finite()),
-            Solid::Triangle(v) => v.iter().flat_map(|p| p.iter()).all(|x| x.is_finite()),
+            Solid::Triangle(t) => t.0.iter().flat_map(|p| p.iter()).all(|x| x.is_finite()),
+        }
+    }
+}
+
+impl LocalBox {
+    /// The `Box` it stands for.
+    fn as_box(&self) -> PlacedBox {
+        PlacedBox {
+            center: Vector3::zeros(),
+            axes: Matrix3::identity(),
+            half: self.half,
+        }
+    }
+}
+
+impl Polytope for PlacedBox {
+    fn faces(&self) -> ([Vector3<f64>; 3], usize) {
+        (columns(&self.axes), 3)
+    }
+
+    fn edges(&self) -> [Vector3<f64>; 3] {
+        columns(&self.axes)
+    }
+
+    fn project(&self, n: &Vector3<f64>) -> (f64, f64) {
+        let (center, axes, half) = (&self.center, &self.axes, &self.half);
+        let reach: f64 = (0..3).map(|i| half[i] * axes.column(i).dot(n).abs()).sum();
+        let at = center.dot(n);
+        (at - reach, at + reach)
+    }
+
+    fn support(&self, n: &Vector3<f64>) -> Vector3<f64> {
+        let mut p = self.center;
+        for i in 0..3 {
+            let a = self.axes.column(i);
+            let along = a.dot(n);
+            if along.abs() > PARALLEL {
+                p += a * (self.half[i] * along.signum());
+            }
+        }
+        p
+    }
+
+    fn edge(&self, k: usize, n: &Vector3<f64>) -> [Vector3<f64>; 2] {
+        let along = self.axes.column(k) * self.half[k];
+        let mut middle = self.center;
+        for i in (0..3).filter(|&i| i != k) {
+            let a = self.axes.column(i);
+            middle += a * (self.half[i] * a.dot(n).signum());
+        }
+        [middle - along, middle + along]
+    }
+}
+
+impl Polytope for LocalBox {
+    fn faces(&self) -> ([Vector3<f64>; 3], usize) {
+        (columns(&Matrix3::identity()), 3)
+    }
+
+    fn edges(&self) -> [Vector3<f64>; 3] {
+        columns(&Matrix3::identity())
+    }
+
+    fn project(&self, n: &Vector3<f64>) -> (f64, f64) {
+        // A unit axis' dot product with `n` is `n`'s coordinate (or a zero
+        // of either sign, which the absolute value clears), and the
+        // origin's is a zero: computed as the `Box` computes it, for its
+        // sign.
+        let reach: f64 = (0..3).map(|i| self.half[i] * n[i].abs()).sum();
+        let at = Vector3::<f64>::zeros().dot(n);
+        (at - reach, at + reach)
+    }
+
+    fn support(&self, n: &Vector3<f64>) -> Vector3<f64> {
+        Vector3::from_fn(|i, _| {
+            if n[i].abs() > PARALLEL {
+                self.half[i] * n[i].signum()
+            } else {
+                0.0
+            }
+        })
+    }
+
+    fn edge(&self, k: usize, n: &Vector3<f64>) -> [Vector3<f64>; 2] {
+        // Which way each other axis faces `n` hangs on the sign of a zero
+        // dot product, which the `Box` decides (a contact between two
+        // edges, rare enough to pay for it).
+        self.as_box().edge(k, n)
+    }
+}
+
+impl Polytope for Triangle3 {
+    fn faces(&self) -> ([Vector3<f64>; 3], usize) {
+        let [a, b, c] = &self.0;
+        let n = (b - a).cross(&(c - a));
+        let length = n.norm();
+        if length > 0.0 && length.is_finite() {
+            ([n / length, Vector3::zeros(), Vector3::zeros()], 1)
+        } else {
+            ([Vector3::zeros(); 3], 0)
         }
     }
 
-    /// Unit face normals (a box's three axes, a triangle's normal; none
-    /// for a triangle without area).
+    fn edges(&self) -> [Vector3<f64>; 3] {
+        let [a, b, c] = &self.0;
+        [b - a, c - b, a - c]
+    }
+
+    fn project(&self, n: &Vector3<f64>) -> (f64, f64) {
+        let v = &self.0;
+        let (a, b, c) = (v[0].dot(n), v[1].dot(n), v[2].dot(n));
+        (a.min(b).min(c), a.max(b).max(c))
+    }
+
+    fn support(&self, n: &Vector3<f64>) -> Vector3<f64> {
+        let v = &self.0;
+        let far = v.iter().map(|p| p.dot(n)).fold(f64::NEG_INFINITY, f64::max);
+        let tied = v
+            .iter()
+            .filter(|p| far - p.dot(n) <= PARALLEL * (1.0 + far.abs()));
+        let (sum, count) = tied.fold((Vector3::zeros(), 0.0), |(s, k), p| (s + p, k + 1.0));
+        sum / count
+    }
+
+    fn edge(&self, k: usize, _n: &Vector3<f64>) -> [Vector3<f64>; 2] {
+        [self.0[k], self.0[(k + 1) % 3]]
+    }
+}
+
+/// The enum answers as its kind does (for the tests, which mix kinds).
+#[cfg(test)]
+impl Polytope for Solid {
     fn faces(&self) -> ([Vector3<f64>; 3], usize) {
         match self {
-            Solid::Box { axes, .. } => (columns(axes), 3),
-            Solid::LocalBox { .. } => (columns(&Matrix3::identity()), 3),
-            Solid::Triangle([a, b, c]) => {
-                let n = (b - a).cross(&(c - a));
-                let length = n.norm();
-                if length > 0.0 && length.is_finite() {
-                    ([n / length, Vector3::zeros(), Vector3::zeros()], 1)
-                } else {
-                    ([Vector3::zeros(); 3], 0)
-                }
-            }
+            Solid::Box(b) => b.faces(),
+            Solid::LocalBox(b) => b.faces(),
+            Solid::Triangle(t) => t.faces(),
         }
     }
 
-    /// Edge directions (a box's axes; a triangle's edges, not unit).
     fn edges(&self) -> [Vector3<f64>; 3] {
         match self {
-            Solid::Box { axes, .. } => columns(axes),
-            Solid::LocalBox { .. } => columns(&Matrix3::identity()),
-            Solid::Triangle([a, b, c]) => [b - a, c - b, a - c],
+            Solid::Box(b) => b.edges(),
+            Solid::LocalBox(b) => b.edges(),
+            Solid::Triangle(t) => t.edges(),
         }
     }
 
-    /// The shape's extent along the unit direction `n`: `[min, max]`.
     fn project(&self, n: &Vector3<f64>) -> (f64, f64) {
         match self {
-            Solid::Box { center, axes, half } => {
-                let reach: f64 = (0..3).map(|i| half[i] * axes.column(i).dot(n).abs()).sum();
-                let at = center.dot(n);
-                (at - reach, at + reach)
-            }
-            Solid::LocalBox { half } => {
-                // A unit axis' dot product with `n` is `n`'s coordinate
-                // (or a zero of either sign, which the absolute value
-                // clears), and the origin's is a zero: computed as the
-                // `Box` computes it, for its sign.
-                let reach: f64 = (0..3).map(|i| half[i] * n[i].abs()).sum();
-                let at = Vector3::<f64>::zeros().dot(n);
-                (at - reach, at + reach)
-            }
-            Solid::Triangle(v) => {
-                let (a, b, c) = (v[0].dot(n), v[1].dot(n), v[2].dot(n));
-                (a.min(b).min(c), a.max(b).max(c))
-            }
+            Solid::Box(b) => b.project(n),
+            Solid::LocalBox(b) => b.project(n),
+            Solid::Triangle(t) => t.project(n),
         }
     }
 
-    /// A point of the shape farthest along `n`: where several are (a face
-    /// or an edge square to `n`), their middle.
     fn support(&self, n: &Vector3<f64>) -> Vector3<f64> {
         match self {
-            Solid::Box { center, axes, half } => {
-                let mut p = *center;
-                for i in 0..3 {
-                    let a = axes.column(i);
-                    let along = a.dot(n);
-                    if along.abs() > PARALLEL {
-                        p += a * (half[i] * along.signum());
-                    }
-                }
-                p
-            }
-            Solid::LocalBox { half } => Vector3::from_fn(|i, _| {
-                if n[i].abs() > PARALLEL {
-                    half[i] * n[i].signum()
-                } else {
-                    0.0
-                }
-            }),
-            Solid::Triangle(v) => {
-                let far = v.iter().map(|p| p.dot(n)).fold(f64::NEG_INFINITY, f64::max);
-                let tied = v
-                    .iter()
-                    .filter(|p| far - p.dot(n) <= PARALLEL * (1.0 + far.abs()));
-                let (sum, count) = tied.fold((Vector3::zeros(), 0.0), |(s, k), p| (s + p, k + 1.0));
-                sum / count
-            }
+            Solid::Box(b) => b.support(n),
+            Solid::LocalBox(b) => b.support(n),
+            Solid::Triangle(t) => t.support(n),
         }
     }
 
-    /// Edge `k` as a segment (its two ends): for a box, the edge along
-    /// axis `k` farthest along `n`.
     fn edge(&self, k: usize, n: &Vector3<f64>) -> [Vector3<f64>; 2] {
         match self {
-            Solid::Box { center, axes, half } => {
-                let along = axes.column(k) * half[k];
-                let mut middle = *center;
-                for i in (0..3).filter(|&i| i != k) {
-                    let a = axes.column(i);
-                    middle += a * (half[i] * a.dot(n).signum());
-                }
-                [middle - along, middle + along]
-            }
-            Solid::Triangle(v) => [v[k], v[(k + 1) % 3]],
-            // Which way each other axis faces `n` hangs on the sign of a
-            // zero dot product, which the `Box` decides (a contact between
-            // two edges, rare enough to pay for it).
-            Solid::LocalBox { .. } => self.as_box().edge(k, n),
+            Solid::Box(b) => b.edge(k, n),
+            Solid::LocalBox(b) => b.edge(k, n),
+            Solid::Triangle(t) => t.edge(k, n),
         }
     }
 }
@@ -297,7 +394,27 @@ pub(crate) fn contact_placed(shape1: &dyn Shape, placed: &Placed, prediction: f6
     if !s1.is_finite() {
         return SatAnswer::Unknown;
     }
-    let iso12 = placed.iso12;
+    let iso12 = &placed.iso12;
+    // The first shape is in its own frame (a local box or a triangle), the
+    // second placed in it (a box or a triangle).
+    match (s1, s2) {
+        (Solid::LocalBox(a), Solid::Box(b)) => separating_axes(&a, &b, iso12, prediction),
+        (Solid::LocalBox(a), Solid::Triangle(b)) => separating_axes(&a, &b, iso12, prediction),
+        (Solid::Triangle(a), Solid::Box(b)) => separating_axes(&a, &b, iso12, prediction),
+        (Solid::Triangle(a), Solid::Triangle(b)) => separating_axes(&a, &b, iso12, prediction),
+        // Only the first shape is ever local, and it always is.
+        _ => SatAnswer::Unknown,
+    }
+}
+
+/// [`contact_placed`] for one pair of kinds: `s1` in its own frame, `s2`
+/// placed in it by `iso12`.
+fn separating_axes<A: Polytope, B: Polytope>(
+    s1: &A,
+    s2: &B,
+    iso12: &Isometry3<f64>,
+    prediction: f64,
+) -> SatAnswer {
     // The largest separation so far, along which unit axis (oriented from
     // the first shape towards the second), of which kind.
     let mut best = (f64::NEG_INFINITY, Vector3::x(), Axis::FaceOfFirst);
@@ -331,13 +448,17 @@ pub(crate) fn contact_placed(shape1: &dyn Shape, placed: &Placed, prediction: f6
     // needs nothing more than a direction to start from. Only overlapping
     // faces ask the edges, for the depth or for an edge that separates.
     let faces_apart = best.0 > 0.0;
-    let (edges1, edges2) = (s1.edges(), s2.edges());
-    for (i, e1) in edges1.iter().enumerate().filter(|_| !faces_apart) {
-        for (j, e2) in edges2.iter().enumerate() {
-            let n = e1.cross(e2);
-            let length = n.norm();
-            if length > PARALLEL * e1.norm() * e2.norm() {
-                consider(&mut best, n / length, Axis::Edges(i, j));
+    if !faces_apart {
+        let (edges1, edges2) = (s1.edges(), s2.edges());
+        let lengths2 = edges2.map(|e| e.norm());
+        for (i, e1) in edges1.iter().enumerate() {
+            let length1 = PARALLEL * e1.norm();
+            for (j, e2) in edges2.iter().enumerate() {
+                let n = e1.cross(e2);
+                let length = n.norm();
+                if length > length1 * lengths2[j] {
+                    consider(&mut best, n / length, Axis::Edges(i, j));
+                }
             }
         }
     }
@@ -589,7 +710,7 @@ mod tests {
             ) else {
                 panic!("case {case}: not triangles");
             };
-            assert_eq!(a.map(|v| bits(&v)), b.map(|v| bits(&v)), "case {case}");
+            assert_eq!(a.0.map(|v| bits(&v)), b.0.map(|v| bits(&v)), "case {case}");
         }
     }
 
