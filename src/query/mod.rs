@@ -185,6 +185,24 @@ pub struct ManyToi {
     pub target: usize,
 }
 
+/// One moving shape and one target, as the slices [`Query::many`] takes.
+pub(crate) fn lone_pair<'a>(
+    shape1: &'a dyn Shape,
+    motion1: &Motion,
+    shape2: &'a dyn Shape,
+    motion2: &Motion,
+) -> ([ShapeMotion<'a>; 1], [ShapeMotion<'a>; 1]) {
+    let moving = ShapeMotion {
+        shape: shape1,
+        motion: *motion1,
+    };
+    let target = ShapeMotion {
+        shape: shape2,
+        motion: *motion2,
+    };
+    ([moving], [target])
+}
+
 /// The time two moving shapes first come within `options.skin`, or `None`
 /// when they stay apart over the searched range.
 pub fn time_of_impact(
@@ -264,14 +282,7 @@ impl Query {
         motion2: &Motion,
         options: &QueryOptions,
     ) -> Result<Option<Toi>, CcdError> {
-        let moving = [ShapeMotion {
-            shape: shape1,
-            motion: *motion1,
-        }];
-        let targets = [ShapeMotion {
-            shape: shape2,
-            motion: *motion2,
-        }];
+        let (moving, targets) = lone_pair(shape1, motion1, shape2, motion2);
         Ok(self.many(&moving, &targets, options)?.map(|hit| hit.toi))
     }
 

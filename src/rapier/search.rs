@@ -6,13 +6,12 @@
 use super::report::CcdReport;
 use crate::error::CcdError;
 use crate::motion::Motion;
-use crate::query::{Found, ManyToi, QueryOptions, ShapeMotion, Toi, with_query};
-use crate::solve::SolveOutcome;
+use crate::query::{Found, ManyToi, QueryOptions, ShapeMotion, Toi, lone_pair, with_query};
 use rapier3d::parry::shape::Shape;
 
-/// [`crate::query::time_of_impact`], counted. Both run on the thread's
-/// query context, whose buffers are kept between calls (a fresh context
-/// grows them anew on every search).
+/// [`crate::query::time_of_impact`], counted. Every search runs on the
+/// thread's query context, whose buffers are kept between calls (a fresh
+/// context grows them anew on every search).
 pub(crate) fn one(
     s1: &dyn Shape,
     m1: &Motion,
@@ -21,33 +20,8 @@ pub(crate) fn one(
     opts: &QueryOptions,
     report: &mut CcdReport,
 ) -> Result<Option<Toi>, CcdError> {
-    with_query(|query| {
-        let found = query.one(s1, m1, s2, m2, opts);
-        report.count(query);
-        found
-    })
-}
-
-/// [`one`] without the hit's witness: its time and status, for a caller
-/// that reads nothing else (the witness is parry's contact at the hit,
-/// some thousands of instructions for two boxes).
-pub(crate) fn one_outcome(
-    s1: &dyn Shape,
-    m1: &Motion,
-    s2: &dyn Shape,
-    m2: &Motion,
-    opts: &QueryOptions,
-    report: &mut CcdReport,
-) -> Result<Option<SolveOutcome>, CcdError> {
-    let moving = [ShapeMotion {
-        shape: s1,
-        motion: *m1,
-    }];
-    let target = [ShapeMotion {
-        shape: s2,
-        motion: *m2,
-    }];
-    Ok(found(&moving, &target, opts, report)?.map(|hit| hit.outcome))
+    let (moving, target) = lone_pair(s1, m1, s2, m2);
+    Ok(many(&moving, &target, opts, report)?.map(|hit| hit.toi))
 }
 
 /// [`crate::query::time_of_impact_many`], counted: [`found`] and the

@@ -19,7 +19,9 @@ use crate::enclosure::TimeSpan;
 use crate::error::CcdError;
 use crate::hashing::FastSet;
 use crate::motion::{Motion, Trajectory};
-use crate::query::{QueryOptions, ShapeMotion, StartContact, Toi, Witness, start_contact};
+use crate::query::{
+    QueryOptions, ShapeMotion, StartContact, Toi, Witness, lone_pair, start_contact,
+};
 use crate::solve::RootStatus;
 use rapier3d::parry::bounding_volume::{Aabb, BoundingVolume};
 use rapier3d::parry::query::{Contact, QueryDispatcher};
@@ -637,11 +639,12 @@ pub(crate) fn first_crossing(
         time_range: TimeSpan::new(0.0, until),
         ..*opts
     };
-    Ok(
-        search::one_outcome(s1, &pair.motion1, s2, &pair.motion2, &opts, report)?
-            .filter(|hit| hit.status != RootStatus::InitiallyTouching)
-            .map(|hit| hit.time),
-    )
+    // Only when: the hit's witness is not read.
+    let (moving, target) = lone_pair(s1, &pair.motion1, s2, &pair.motion2);
+    Ok(search::found(&moving, &target, &opts, report)?
+        .map(|hit| hit.outcome)
+        .filter(|hit| hit.status != RootStatus::InitiallyTouching)
+        .map(|hit| hit.time))
 }
 
 /// Sweeps every enabled collider of `body`: the earliest solid impact, and

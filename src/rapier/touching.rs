@@ -15,7 +15,7 @@ use crate::convert::{glam_from_vec, pose_from_iso, vec_from_glam};
 use crate::enclosure::TimeSpan;
 use crate::error::CcdError;
 use crate::motion::{Motion, Trajectory};
-use crate::query::{QueryOptions, Settle, ShapeMotion, Toi, Witness, contact_settled};
+use crate::query::{QueryOptions, Settle, ShapeMotion, Toi, Witness, contact_settled, lone_pair};
 use crate::solve::RootStatus;
 use nalgebra::Vector3;
 use rapier3d::parry::query::{Contact, Unsupported};
@@ -427,7 +427,9 @@ fn proved_within(
         initial_contact: InitialContact::Report,
         ..*opts
     };
-    match search::one_outcome(s1, &m1.shifted(back), s2, m2, &apart, report) {
+    // Only whether the shifted pair meets: the hit's witness is not read.
+    let (shifted, target) = lone_pair(s1, &m1.shifted(back), s2, m2);
+    match search::found(&shifted, &target, &apart, report) {
         Ok(None) => true,
         Ok(Some(_)) => false,
         Err(_) => false,
