@@ -24,7 +24,9 @@ use rapier3d::parry::query::{
     ClosestPoints, Contact, DefaultQueryDispatcher, NonlinearRigidMotion, QueryDispatcher,
     ShapeCastHit, ShapeDistance, ShapeIntersection, Unsupported,
 };
-use rapier3d::parry::shape::{CompositeShape, HeightField, Shape, ShapeType, SupportMap};
+use rapier3d::parry::shape::{
+    CompositeShape, HeightField, Shape, ShapeType, SupportMap, TypedShape,
+};
 
 /// parry's contact between two posed shapes within `prediction` metres
 /// (`Ok(None)`: farther apart; `Err`: parry has no answer for the pair).
@@ -481,9 +483,27 @@ impl AxesFirst {
             SatAnswer::Beyond => return Ok(None),
             SatAnswer::Overlap(c) => return Ok(Some(c)),
             SatAnswer::Apart(axis, _) => {
-                if let (Some(s1), Some(s2)) = (g1.as_support_map(), g2.as_support_map()) {
-                    return Ok(gjk_contact(pos12, s1, s2, prediction, axis));
-                }
+                // GJK over the concrete shapes: through `dyn SupportMap`
+                // every support point of its iterations was a virtual call.
+                let found = match (g1.as_typed_shape(), g2.as_typed_shape()) {
+                    (TypedShape::Cuboid(a), TypedShape::Cuboid(b)) => {
+                        gjk_contact(pos12, a, b, prediction, axis)
+                    }
+                    (TypedShape::Cuboid(a), TypedShape::Triangle(b)) => {
+                        gjk_contact(pos12, a, b, prediction, axis)
+                    }
+                    (TypedShape::Triangle(a), TypedShape::Cuboid(b)) => {
+                        gjk_contact(pos12, a, b, prediction, axis)
+                    }
+                    (TypedShape::Triangle(a), TypedShape::Triangle(b)) => {
+                        gjk_contact(pos12, a, b, prediction, axis)
+                    }
+                    _ => match (g1.as_support_map(), g2.as_support_map()) {
+                        (Some(a), Some(b)) => gjk_contact(pos12, a, b, prediction, axis),
+                        _ => return DefaultQueryDispatcher.contact(pos12, g1, g2, prediction),
+                    },
+                };
+                return Ok(found);
             }
             SatAnswer::Unknown => {}
         }
@@ -596,10 +616,10 @@ impl QueryDispatcher for AxesFirst {
 /// parry's contact of two convex shapes apart by less than `prediction`
 /// (its GJK, started along `axis`: a separating direction of the first
 /// shape's frame, pointing towards the second), in parry's form.
-fn gjk_contact(
+fn gjk_contact<G1: SupportMap + ?Sized, G2: SupportMap + ?Sized>(
     pos12: &Pose,
-    g1: &dyn SupportMap,
-    g2: &dyn SupportMap,
+    g1: &G1,
+    g2: &G2,
     prediction: Real,
     axis: Vector3<f64>,
 ) -> Option<Contact> {
