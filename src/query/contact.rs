@@ -483,8 +483,9 @@ impl AxesFirst {
             SatAnswer::Beyond => return Ok(None),
             SatAnswer::Overlap(c) => return Ok(Some(c)),
             SatAnswer::Apart(axis, _) => {
-                // GJK over the concrete shapes: through `dyn SupportMap`
-                // every support point of its iterations was a virtual call.
+                // GJK over the concrete shapes (the axes answer only boxes
+                // and triangles): through `dyn SupportMap` every support
+                // point of its iterations was a virtual call.
                 let found = match (g1.as_typed_shape(), g2.as_typed_shape()) {
                     (TypedShape::Cuboid(a), TypedShape::Cuboid(b)) => {
                         gjk_contact(pos12, a, b, prediction, axis)
@@ -498,10 +499,7 @@ impl AxesFirst {
                     (TypedShape::Triangle(a), TypedShape::Triangle(b)) => {
                         gjk_contact(pos12, a, b, prediction, axis)
                     }
-                    _ => match (g1.as_support_map(), g2.as_support_map()) {
-                        (Some(a), Some(b)) => gjk_contact(pos12, a, b, prediction, axis),
-                        _ => return DefaultQueryDispatcher.contact(pos12, g1, g2, prediction),
-                    },
+                    _ => return DefaultQueryDispatcher.contact(pos12, g1, g2, prediction),
                 };
                 return Ok(found);
             }
@@ -616,7 +614,7 @@ impl QueryDispatcher for AxesFirst {
 /// parry's contact of two convex shapes apart by less than `prediction`
 /// (its GJK, started along `axis`: a separating direction of the first
 /// shape's frame, pointing towards the second), in parry's form.
-fn gjk_contact<G1: SupportMap + ?Sized, G2: SupportMap + ?Sized>(
+fn gjk_contact<G1: SupportMap, G2: SupportMap>(
     pos12: &Pose,
     g1: &G1,
     g2: &G2,

@@ -37,7 +37,8 @@ pub enum Family {
     /// A pair settled before its family was asked: apart by the balls
     /// about each side's centre, by a mesh piece's box, or from the exact
     /// poses at the node's middle; or left unknown on a node over which it
-    /// turns too far for its family to tell more.
+    /// turns too far for its family to tell more (or, a mesh piece whose
+    /// gap could not be built, never apart: its error ends the query).
     Shortcut,
 }
 
