@@ -331,16 +331,18 @@ fn print_table(reports: &[SceneReport]) {
 }
 
 /// Where the affine stage's time goes, per scene: per step, the bodies it
-/// swept, the collider pairs it queried, the pairs touching at the start
-/// (sampled, left to rapier), the late shallow contacts (left to rapier),
-/// the pair evaluations and the clamps; and its CCD time per step.
+/// swept, the collider pairs it queried, the pairs moving together (left
+/// to rapier unqueried), the pairs touching at the start (sampled, left to
+/// rapier), the late shallow contacts (left to rapier), the pair
+/// evaluations and the clamps; and its CCD time per step.
 fn print_profile(reports: &[SceneReport]) {
     println!();
     println!(
-        "{:<26} {:>8} {:>8} {:>9} {:>8} {:>11} {:>8} {:>9}",
+        "{:<26} {:>8} {:>8} {:>9} {:>9} {:>8} {:>11} {:>8} {:>9}",
         "affine stage, per step",
         "bodies",
         "pairs",
+        "together",
         "touching",
         "shallow",
         "evaluations",
@@ -353,10 +355,11 @@ fn print_profile(reports: &[SceneReport]) {
         };
         let per = |x: f64| x / p.steps.max(1) as f64;
         println!(
-            "{:<26} {:>8.2} {:>8.2} {:>9.2} {:>8.2} {:>11.1} {:>8.3} {:>9.4}",
+            "{:<26} {:>8.2} {:>8.2} {:>9.2} {:>9.2} {:>8.2} {:>11.1} {:>8.3} {:>9.4}",
             r.scene,
             per(p.bodies_swept as f64),
             per(p.pairs as f64),
+            per(p.together as f64),
             per(p.touching as f64),
             per(p.shallow as f64),
             per(p.evaluations as f64),

@@ -133,6 +133,55 @@ fn the_report_counts_evaluations_by_family() {
     assert!(clamped > 0, "the box was never clamped");
 }
 
+/// Bodies flying on together at 60 m/s (a row of cubes 1 mm apart, as a
+/// paddle leaves them) cannot pass through one another: the stage leaves
+/// those pairs to rapier's contacts and clamps none of them. A cube
+/// catching up with another at 30 m/s is still swept against it, and
+/// stopped behind it.
+#[test]
+fn bodies_moving_together_are_left_to_contacts() {
+    let cube = || ColliderBuilder::cuboid(0.1, 0.1, 0.1);
+    let flying = |x: f32, speed: f32| {
+        RigidBodyBuilder::dynamic()
+            .translation(Vector::new(x, 0.0, 0.0))
+            .linvel(Vector::new(speed, 0.0, 0.0))
+    };
+
+    let mut row = Run::new(Ccd::Affine, Vector::ZERO);
+    let cubes: Vec<_> = (0..3)
+        .map(|k| row.dynamic(flying(0.201 * k as f32, 60.0), cube()))
+        .collect();
+    let mut together = 0;
+    for _ in 0..10 {
+        row.step();
+        let report = row.stage.as_ref().unwrap().report();
+        together += report.pairs_moving_together;
+        assert_eq!(report.clamps(), 0, "{report:?}");
+    }
+    // Each cube's first sweep finds its neighbours moving with it.
+    assert!(together >= 10 * 4, "{together} pairs moving together");
+    for pair in cubes.windows(2) {
+        let gap = row.x(pair[1]) - row.x(pair[0]) - 0.2;
+        assert!(gap.abs() < 2.0e-3, "the row came apart by {gap} m");
+    }
+
+    // 0.3 m apart, closing 0.5 m a step: they meet within the first step.
+    let mut chase = Run::new(Ccd::Affine, Vector::ZERO);
+    let leader = chase.dynamic(flying(0.0, 30.0), cube());
+    let chaser = chase.dynamic(flying(-0.5, 60.0), cube());
+    chase.step();
+    let report = chase.stage.as_ref().unwrap().report();
+    assert_eq!(report.pairs_moving_together, 0, "{report:?}");
+    assert!(report.hits.iter().any(|h| h.body == chaser), "{report:?}");
+    for _ in 0..10 {
+        assert!(
+            chase.x(chaser) < chase.x(leader),
+            "the chaser passed the leader"
+        );
+        chase.step();
+    }
+}
+
 #[test]
 fn a_cone_at_200_m_s_stops_at_a_thin_wall() {
     let rapier_tunnels = wall_scenario(

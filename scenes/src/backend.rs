@@ -96,6 +96,8 @@ pub struct StageProfile {
     pub bodies_swept: usize,
     /// Collider pairs handed to the time-of-impact query.
     pub pairs: usize,
+    /// Pairs moving together (left to rapier's contacts, not queried).
+    pub together: usize,
     /// Pairs touching at the start of a step (sampled, left to rapier).
     pub touching: usize,
     /// Contacts made too late in a step to get deep (left to rapier).
@@ -114,6 +116,7 @@ impl StageProfile {
         self.steps += 1;
         self.bodies_swept += r.bodies_swept;
         self.pairs += r.pairs;
+        self.together += r.pairs_moving_together;
         self.touching += r.pairs_touching_at_start;
         self.shallow += r.shallow_contacts;
         self.evaluations += r.evaluations;

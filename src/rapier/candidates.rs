@@ -9,7 +9,9 @@
 //! the query box is enlarged by the largest travel of any moved body, and
 //! each moving candidate is then checked against its own swept box.
 
+use super::backoff::pair_relative_travel;
 use super::moved::Moved;
+use super::select::thickness;
 use super::world::{MotionCache, StageWorld, StepMotions};
 use crate::convert::pose_from_iso;
 use crate::enclosure::TimeSpan;
@@ -394,6 +396,25 @@ fn admit(
 /// Whether collider `co` moves this step (its body is among the moved).
 pub(crate) fn is_moving(motions: &StepMotions, co: &Collider) -> bool {
     co.parent().is_some_and(|b| motions.body(b).is_some())
+}
+
+/// Whether two moving shapes move together: no point of one comes nearer
+/// to or farther from any point of the other over the step than
+/// `fast_factor` times the thinner one's thickness (`select::thickness`;
+/// `thickness1` is `s1`'s, taken once per sweep). Neither can pass
+/// through the other then; such a pair is as slow as the stage's test for
+/// fast bodies leaves to rapier's contacts (a row of boxes a paddle threw,
+/// flying on together; two bodies stuck after a head-on hit, drifting on).
+pub(crate) fn move_together(
+    s1: &dyn Shape,
+    m1: &Motion,
+    thickness1: f64,
+    s2: &dyn Shape,
+    m2: &Motion,
+    fast_factor: f64,
+) -> bool {
+    let thinner = thickness1.min(thickness(s2));
+    thinner > 0.0 && pair_relative_travel(s1, m1, s2, m2) <= fast_factor * thinner
 }
 
 /// A box holding collider `co` over the step, from its body's two poses

@@ -45,6 +45,12 @@ pub struct CcdReport {
     pub bodies_swept: usize,
     /// Collider pairs handed to the time-of-impact query.
     pub pairs: usize,
+    /// Pairs of a sweep against everything (a fast body's first) whose
+    /// bodies move together: no point of one nears or leaves the other by
+    /// more than `fast_factor` times the thinner one's thickness over the
+    /// step, so neither can pass through the other. They are left to
+    /// rapier's contacts, as slow bodies are, and not counted in `pairs`.
+    pub pairs_moving_together: usize,
     /// Pairs already within the skin at the start of the step, left to
     /// rapier's contacts unless they sink deeper than `CcdConfig::sink`.
     pub pairs_touching_at_start: usize,
@@ -86,6 +92,7 @@ impl CcdReport {
     pub(crate) fn absorb(&mut self, piece: &CcdReport, start: f64, dt: f64) {
         self.bodies_swept += piece.bodies_swept;
         self.pairs += piece.pairs;
+        self.pairs_moving_together += piece.pairs_moving_together;
         self.pairs_touching_at_start += piece.pairs_touching_at_start;
         self.shallow_contacts += piece.shallow_contacts;
         self.evaluations += piece.evaluations;

@@ -7,11 +7,12 @@ use super::backoff::{
 };
 use super::candidates::{
     Candidate, FEW_PIECES, Interaction, MAX_PIECES, MeshPiece, MovingBoxes, gather, gather_listed,
-    interaction, is_moving, mesh_triangles, pose_path_box, swept_aabb,
+    interaction, is_moving, mesh_triangles, move_together, pose_path_box, swept_aabb,
 };
 use super::moved::Moved;
 use super::report::CcdReport;
 use super::search;
+use super::select::thickness;
 use super::touching::{gap_at, never_as_deep, past_band, read_gap, touching_pair};
 use super::world::{MotionCache, StageWorld, StepMotions};
 use crate::convert::{pose_from_iso, vec_from_glam};
@@ -720,10 +721,16 @@ pub(crate) fn sweep_body(
         // Then the motion and its own swept box, which the candidates must
         // meet too: first by the box they were found with (most are dropped
         // here), a moving one then by its own swept box, its motion built
-        // only now.
+        // only now. In a sweep against everything (a fast body's first, a
+        // rerouted one's), a solid one that moves together with this
+        // collider is rapier's contacts' (see `move_together`); a re-sweep
+        // of what a clamp changed keeps it.
         let (motion1, swept) = ws.motions.get_swept(motions, h1, co1, scene.bodies)?;
         let mut failure = None;
         let cache = &mut ws.motions;
+        let first = matches!(targets, Targets::All);
+        let (fast_factor, thickness1) = (scene.config.fast_factor, thickness(co1.shape()));
+        let mut together = 0;
         ws.candidates.retain(|c| {
             if !c.bounds.intersects(&swept) {
                 return false;
@@ -732,8 +739,29 @@ pub(crate) fn sweep_body(
             if !is_moving(motions, co2) {
                 return true;
             }
-            match cache.swept(motions, c.handle, co2, scene.bodies) {
+            let meets = match cache.swept(motions, c.handle, co2, scene.bodies) {
                 Ok(own) => own.intersects(&swept),
+                Err(e) => {
+                    failure = Some(e);
+                    false
+                }
+            };
+            if !meets || !first || !matches!(c.interaction, Interaction::Solid) {
+                return meets;
+            }
+            match cache.motion(motions, c.handle, co2, scene.bodies) {
+                Ok(m2) => {
+                    let with = move_together(
+                        co1.shape(),
+                        &motion1,
+                        thickness1,
+                        co2.shape(),
+                        m2,
+                        fast_factor,
+                    );
+                    together += usize::from(with);
+                    !with
+                }
                 Err(e) => {
                     failure = Some(e);
                     false
@@ -743,6 +771,7 @@ pub(crate) fn sweep_body(
         if let Some(e) = failure {
             return Err(e);
         }
+        report.pairs_moving_together += together;
         let mut solid: FewMotions = FewMotions::with_capacity(ws.candidates.len());
         let mut handles: Few<ColliderHandle> = Few::with_capacity(ws.candidates.len());
         let mut held: Few<bool> = Few::with_capacity(ws.candidates.len());

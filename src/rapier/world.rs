@@ -179,6 +179,18 @@ impl MotionCache {
         Ok(self.entry(motions, handle, co, bodies)?.motion)
     }
 
+    /// The motion of collider `handle` over the step, read in place (a
+    /// test that only reads it need not copy its 240 bytes).
+    pub fn motion(
+        &mut self,
+        motions: &StepMotions,
+        handle: ColliderHandle,
+        co: &Collider,
+        bodies: &RigidBodySet,
+    ) -> Result<&Motion, CcdError> {
+        Ok(&self.entry(motions, handle, co, bodies)?.motion)
+    }
+
     /// The motion of collider `handle` and the box it sweeps
     /// (`candidates::swept_aabb`), each built once per body motion.
     pub fn get_swept(
