@@ -739,34 +739,29 @@ pub(crate) fn sweep_body(
             if !is_moving(motions, co2) {
                 return true;
             }
-            let meets = match cache.swept(motions, c.handle, co2, scene.bodies) {
-                Ok(own) => own.intersects(&swept),
+            let (own, motion2) = match cache.swept_motion(motions, c.handle, co2, scene.bodies) {
+                Ok(found) => found,
                 Err(e) => {
                     failure = Some(e);
-                    false
+                    return false;
                 }
             };
-            if !meets || !first || !matches!(c.interaction, Interaction::Solid) {
-                return meets;
+            if !own.intersects(&swept) {
+                return false;
             }
-            match cache.motion(motions, c.handle, co2, scene.bodies) {
-                Ok(m2) => {
-                    let with = move_together(
-                        co1.shape(),
-                        &motion1,
-                        thickness1,
-                        co2.shape(),
-                        m2,
-                        fast_factor,
-                    );
-                    together += usize::from(with);
-                    !with
-                }
-                Err(e) => {
-                    failure = Some(e);
-                    false
-                }
+            if !first || !matches!(c.interaction, Interaction::Solid) {
+                return true;
             }
+            let with = move_together(
+                co1.shape(),
+                &motion1,
+                thickness1,
+                co2.shape(),
+                motion2,
+                fast_factor,
+            );
+            together += usize::from(with);
+            !with
         });
         if let Some(e) = failure {
             return Err(e);

@@ -179,16 +179,18 @@ impl MotionCache {
         Ok(self.entry(motions, handle, co, bodies)?.motion)
     }
 
-    /// The motion of collider `handle` over the step, read in place (a
-    /// test that only reads it need not copy its 240 bytes).
-    pub fn motion(
+    /// The box collider `handle` sweeps and its motion, read in place (a
+    /// test that only reads the motion need not copy its 240 bytes), from
+    /// one lookup.
+    pub fn swept_motion(
         &mut self,
         motions: &StepMotions,
         handle: ColliderHandle,
         co: &Collider,
         bodies: &RigidBodySet,
-    ) -> Result<&Motion, CcdError> {
-        Ok(&self.entry(motions, handle, co, bodies)?.motion)
+    ) -> Result<(Aabb, &Motion), CcdError> {
+        let built = self.entry(motions, handle, co, bodies)?;
+        Ok((built.swept(co), &built.motion))
     }
 
     /// The motion of collider `handle` and the box it sweeps
