@@ -11,6 +11,11 @@
 //! affine/pipeline: what the stage costs on top of rapier stepping the
 //! same world.
 //!
+//! The median step of a scene that settles is an idle one, where the stage
+//! does next to nothing and what rapier does decides the ratio; the last
+//! column, `run a/r`, is affine/rapier over the whole run's steps (each
+//! backend's least disturbed run), where the busy steps weigh in.
+//!
 //! `cargo bench --bench scenes` (prints a table; no criterion: each scene
 //! run is already a median over its steps). `-- --substeps N` runs rapier
 //! and affine cutting steps into at most N pieces (`max_ccd_substeps`,
@@ -60,7 +65,7 @@ fn main() {
         None => println!("reproduce: cargo bench --bench scenes"),
     }
     println!(
-        "{:<26} {:>9} {:>9} {:>9} {:>13} {:>10} {:>10} {:>15}",
+        "{:<26} {:>9} {:>9} {:>9} {:>13} {:>10} {:>10} {:>15} {:>8}",
         "scene",
         "off ms",
         "rapier ms",
@@ -68,7 +73,8 @@ fn main() {
         "affine/rapier",
         "affine/off",
         "pipe ms",
-        "affine/pipeline"
+        "affine/pipeline",
+        "run a/r"
     );
     for scene in scenes::all() {
         let mut medians = [f64::INFINITY; 3];
@@ -95,7 +101,7 @@ fn main() {
         }
         let [off, rapier, affine] = medians;
         println!(
-            "{:<26} {:>9.4} {:>9.4} {:>9.4} {:>13.2} {:>10.2} {:>10.4} {:>15.2}",
+            "{:<26} {:>9.4} {:>9.4} {:>9.4} {:>13.2} {:>10.2} {:>10.4} {:>15.2} {:>8.2}",
             scene.name,
             off,
             rapier,
@@ -103,7 +109,8 @@ fn main() {
             affine / rapier,
             affine / off,
             pipeline,
-            affine / pipeline
+            affine / pipeline,
+            totals[2] / totals[1]
         );
         if scene.name == QUIET {
             print_quiet(&scene, &options, totals);
