@@ -650,6 +650,38 @@ mod tests {
         inner.mins.cmpge(outer.mins).all() && inner.maxs.cmple(outer.maxs).all()
     }
 
+    /// Two 20 cm cubes flying on together at 60 m/s move together; one
+    /// catching up at 10 m/s (17 cm a step, where half its thickness, a
+    /// half extent, allows 5 cm), or turning at 40 rad/s (its corners
+    /// swing 11 cm), does not; nor does anything with a triangle, which
+    /// has no thickness.
+    #[test]
+    fn moving_together_is_a_small_relative_travel() {
+        use crate::rapier::testing::flying;
+        use nalgebra::{UnitQuaternion, Vector3};
+        use rapier3d::parry::shape::{Cuboid, Triangle};
+        let cube = Cuboid::new(Vector::splat(0.1));
+        let dt = 1.0 / 60.0;
+        let at = |x: f64, v: f64, w: f64| {
+            flying(
+                Vector3::new(x, 0.0, 0.0),
+                UnitQuaternion::identity(),
+                Vector3::new(v, 0.0, 0.0),
+                Vector3::new(0.0, 0.0, w),
+                dt,
+            )
+        };
+        let together = |a: &Motion, b: &dyn Shape, mb: &Motion| {
+            move_together(&cube, a, thickness(&cube), b, mb, 0.5)
+        };
+        let lead = at(0.0, 60.0, 0.0);
+        assert!(together(&lead, &cube, &at(0.201, 60.0, 0.0)));
+        assert!(!together(&lead, &cube, &at(0.201, 70.0, 0.0)));
+        assert!(!together(&lead, &cube, &at(0.201, 60.0, 40.0)));
+        let triangle = Triangle::new(Vector::ZERO, Vector::X, Vector::Y);
+        assert!(!together(&lead, &triangle, &at(0.201, 60.0, 0.0)));
+    }
+
     /// A ball thrown up and falling back over a part of the step: its path
     /// rises above both its ends (the top at 0.75 of the step, 12 cm above
     /// the higher end), which the part's box takes in.
