@@ -728,8 +728,10 @@ pub(crate) fn sweep_body(
         let (motion1, swept) = ws.motions.get_swept(motions, h1, co1, scene.bodies)?;
         let mut failure = None;
         let cache = &mut ws.motions;
-        let first = matches!(targets, Targets::All);
-        let (fast_factor, thickness1) = (scene.config.fast_factor, thickness(co1.shape()));
+        let against_all = matches!(targets, Targets::All);
+        let fast_factor = scene.config.fast_factor;
+        // Read on first need (a compound's walks its parts).
+        let mut thickness1 = None;
         let mut together = 0;
         ws.candidates.retain(|c| {
             if !c.bounds.intersects(&swept) {
@@ -749,13 +751,13 @@ pub(crate) fn sweep_body(
             if !own.intersects(&swept) {
                 return false;
             }
-            if !first || !matches!(c.interaction, Interaction::Solid) {
+            if !against_all || !matches!(c.interaction, Interaction::Solid) {
                 return true;
             }
             let with = move_together(
                 co1.shape(),
                 &motion1,
-                thickness1,
+                *thickness1.get_or_insert_with(|| thickness(co1.shape())),
                 co2.shape(),
                 motion2,
                 fast_factor,
