@@ -278,29 +278,41 @@ impl Rounds {
             .collect();
         for (i, hit, cut) in cuts {
             let handle = self.current[i].handle;
-            match cut {
+            let changed = match cut {
                 Ok(Cut::Carried(cut, p, v)) => {
                     self.current[i] = cut;
                     self.velocity[i] = Some(self.velocity[p].unwrap_or(v));
                     self.carried.insert(handle);
                     self.rerouted.insert(handle);
+                    true
                 }
                 Ok(Cut::Truncated(cut, new_path)) => {
-                    if new_path {
+                    // Cut to the motion it already has (a body held at its
+                    // start and found there again), nothing changed for
+                    // the next round to sweep: a spinner held at its start
+                    // was found there round after round, its motion the
+                    // same each time, for all eight rounds.
+                    let old = &self.current[i];
+                    let changed =
+                        cut.end != old.end || cut.angvel != old.angvel || cut.accel != old.accel;
+                    if new_path && changed {
                         self.rerouted.insert(handle);
                     }
                     self.current[i] = cut;
                     self.scale[i] *= hit.toi.fraction;
+                    changed
                 }
                 Err(e) => {
                     report.skip(handle, SkipReason::Query(e.to_string()));
                     continue;
                 }
-            }
+            };
             self.held[i] |= hit.touching;
             self.last[i] = Some(hit);
-            self.changed.push(i);
-            self.changed_set.insert(handle);
+            if changed {
+                self.changed.push(i);
+                self.changed_set.insert(handle);
+            }
         }
         self.pushing.extend(self.carried.iter().copied());
     }
