@@ -18,7 +18,7 @@ use std::f32::consts::{PI, TAU};
 const SPIN_MATCH: Real = turns::SPIN_MATCH as Real;
 
 /// Below this angle (radians) the rotation axis is numerical noise.
-const TINY_ANGLE: Real = 1.0e-6;
+const TINY_ANGLE: Real = turns::TINY_ANGLE as Real;
 
 /// One body's motion over a step, as a function of the step fraction t ∈ [0, 1].
 #[derive(Clone, Copy, Debug)]

@@ -24,6 +24,11 @@ pub fn free_flight(delta: Vector, linvel: Vector, dt: Real) -> bool {
 /// angular velocity to choose the whole turns of the motion.
 pub const SPIN_MATCH: f64 = std::f64::consts::FRAC_PI_4;
 
+/// Below this angle (radians) the turn between two orientations has no
+/// axis to speak of (the quaternion's axis is then any): the spin's own
+/// axis is taken, with no turn about it.
+pub const TINY_ANGLE: f64 = 1.0e-6;
+
 /// The angular velocity that chooses the whole turns of the motion from
 /// `start` to `end` (see `Motion::from_poses`): the body's own when the end
 /// orientation is within [`SPIN_MATCH`] of a free spin at it, else zero
@@ -51,8 +56,14 @@ pub(crate) fn turn_hint(rb: &RigidBody, start: &Pose, end: &Pose, dt: f64) -> Ve
     let (axis, angle) = (vec_from_glam(axis), angle as f64);
     let w = vec_from_glam(angvel) * dt;
     // The turn about the axis oriented along the spin, whole turns added
-    // to come nearest the spin's component along it.
-    let (axis, signed) = if axis.dot(&w) < 0.0 {
+    // to come nearest the spin's component along it. No turn at all (a
+    // body held at its start) is about the spin's own axis: along an
+    // arbitrary one the spin's component is nothing, and every spin
+    // seemed to match no turn (a 200 rad/s fan held at its start was swept
+    // turning a whole turn in place, and clamped 50° round on that path).
+    let (axis, signed) = if angle.abs() < TINY_ANGLE {
+        (w.normalize(), 0.0)
+    } else if axis.dot(&w) < 0.0 {
         (-axis, -angle)
     } else {
         (axis, angle)
@@ -64,5 +75,35 @@ pub(crate) fn turn_hint(rb: &RigidBody, start: &Pose, end: &Pose, dt: f64) -> Ve
         angvel
     } else {
         Vector::ZERO
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rapier3d::prelude::{RigidBodyBuilder, Rotation};
+
+    /// A body spinning at `spin` rad/s about z, still, whose two poses are
+    /// the same (held at its start, or turned whole turns).
+    fn held(spin: f32) -> (RigidBody, Pose) {
+        let pose = Pose::from_parts(Vector::new(1.0, 2.0, 3.0), Rotation::from_rotation_x(0.3));
+        let rb = RigidBodyBuilder::dynamic()
+            .pose(pose)
+            .angvel(Vector::new(0.0, 0.0, spin))
+            .build();
+        (rb, pose)
+    }
+
+    /// With no turn between its poses, a spin of 250 rad/s over 1/60 s
+    /// (4.2 rad) matches no whole turn: no hint. A spin of one whole turn a
+    /// step does (the poses alone cannot tell it from standing still).
+    #[test]
+    fn no_turn_matches_only_a_spin_of_whole_turns() {
+        let dt = 1.0 / 60.0;
+        let (rb, pose) = held(250.0);
+        assert_eq!(turn_hint(&rb, &pose, &pose, dt), Vector::ZERO);
+        let whole = (std::f64::consts::TAU / dt) as f32;
+        let (rb, pose) = held(whole);
+        assert_eq!(turn_hint(&rb, &pose, &pose, dt), rb.angvel());
     }
 }
