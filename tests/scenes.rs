@@ -387,13 +387,14 @@ fn the_rest_counter_compares_final_poses_with_rapier() {
     }
 }
 
-/// A fast spinner held at its start (its clamp at the step's start) and
-/// found there again in the next round, with the same cut, ends the
-/// rounds: in `spinning_trimesh`'s first step the 250 rad/s mesh touches
-/// the wall at once, and each of the three bodies is swept at most twice
-/// (the first sweeps, then the clamped body and its neighbours against its
-/// cut), where every round used to find the same clamp again for all
-/// eight rounds (24 sweeps).
+/// A fast spinner held at its start (its clamp at the step's start) ends
+/// the rounds: in `spinning_trimesh`'s first step the 250 rad/s mesh
+/// touches the wall at once, and each of the three bodies is swept at most
+/// twice (the first sweeps, then the clamped body and its neighbours
+/// against its cut). The held mesh was once swept turning a whole turn in
+/// place (the turn hint of no turn), found held again with the same cut in
+/// every round, for all eight rounds (24 sweeps); a cut that leaves a
+/// motion as it was now ends the rounds, and a held body no longer turns.
 #[test]
 fn a_body_held_at_its_start_ends_the_rounds() {
     let scene = scenes::all()
