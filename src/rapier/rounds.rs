@@ -288,10 +288,9 @@ impl Rounds {
                 }
                 Ok(Cut::Truncated(cut, new_path)) => {
                     // Cut to the motion it already has (a body held at its
-                    // start and found there again), nothing changed for
-                    // the next round to sweep: a spinner held at its start
-                    // was found there round after round, its motion the
-                    // same each time, for all eight rounds.
+                    // start and found there again): nothing changed for
+                    // the next round to sweep, which would only find the
+                    // same cut again, round after round.
                     let old = &self.current[i];
                     let changed =
                         cut.end != old.end || cut.angvel != old.angvel || cut.accel != old.accel;

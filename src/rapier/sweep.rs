@@ -725,7 +725,8 @@ pub(crate) fn sweep_body(
         // rerouted one's), a solid one that moves together with this
         // collider is rapier's contacts' (see `move_together`); a re-sweep
         // of what a clamp changed keeps it.
-        let (motion1, swept) = ws.motions.get_swept(motions, h1, co1, scene.bodies)?;
+        let (swept, motion1) = ws.motions.swept_motion(motions, h1, co1, scene.bodies)?;
+        let motion1 = *motion1;
         let mut failure = None;
         let cache = &mut ws.motions;
         let against_all = matches!(targets, Targets::All);

@@ -179,9 +179,10 @@ impl MotionCache {
         Ok(self.entry(motions, handle, co, bodies)?.motion)
     }
 
-    /// The box collider `handle` sweeps and its motion, read in place (a
-    /// test that only reads the motion need not copy its 240 bytes), from
-    /// one lookup.
+    /// The box collider `handle` sweeps (`candidates::swept_aabb`) and its
+    /// motion, each built once per body motion, from one lookup; the
+    /// motion read in place (a test that only reads it need not copy its
+    /// 240 bytes).
     pub fn swept_motion(
         &mut self,
         motions: &StepMotions,
@@ -191,19 +192,6 @@ impl MotionCache {
     ) -> Result<(Aabb, &Motion), CcdError> {
         let built = self.entry(motions, handle, co, bodies)?;
         Ok((built.swept(co), &built.motion))
-    }
-
-    /// The motion of collider `handle` and the box it sweeps
-    /// (`candidates::swept_aabb`), each built once per body motion.
-    pub fn get_swept(
-        &mut self,
-        motions: &StepMotions,
-        handle: ColliderHandle,
-        co: &Collider,
-        bodies: &RigidBodySet,
-    ) -> Result<(Motion, Aabb), CcdError> {
-        let built = self.entry(motions, handle, co, bodies)?;
-        Ok((built.motion, built.swept(co)))
     }
 
     /// The box collider `handle` sweeps over the step, built once per body
