@@ -430,6 +430,10 @@ impl<E: Enclosure> GapSet<E> for PairSet<'_, E> {
         matches!(&self.pairs[pair].kind, PairContent::Leaf(gap, _) if gap.is_exact())
     }
 
+    fn is_composite(&self, pair: usize) -> bool {
+        matches!(&self.pairs[pair].kind, PairContent::Composite(_))
+    }
+
     fn begin_node(&mut self, _span: TimeSpan) {
         self.frames.begin_node();
         self.sweeps.clear();
