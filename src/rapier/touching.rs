@@ -64,7 +64,8 @@ pub(super) fn past_band(band: f64) -> f64 {
 }
 
 /// How much deeper than allowed a rounded touching pair is stopped at,
-/// metres (see [`touching_pair`]).
+/// and a touching pair's proof lets it go, metres (see [`touching_pair`]
+/// and [`proved_within`]).
 const DEEPER: f64 = 1.0e-4;
 
 /// Most samples a pair touching at the start takes over the step.
@@ -400,12 +401,18 @@ pub(super) fn never_as_deep(
     budget > 0.0 && pair_approaches_within(moving, target, &normal, budget)
 }
 
-/// Cheap proof that a touching pair never gets deeper than `allowed`:
-/// shifted `allowed` back along the normal of its contact at the start,
-/// `start`, the moving shape
-/// never touches the target (one sound query); the shift then separates
-/// them at every time, so the depth (parry's: the least translation apart)
-/// stays within `allowed`. `false` when the shifted shape does touch (the
+/// Cheap proof that a touching pair never gets more than [`DEEPER`] deeper
+/// than `allowed`: shifted that far back along the normal of its contact
+/// at the start, `start`, the moving shape never touches the target (one
+/// sound query); the shift then separates them at every time, so the depth
+/// (parry's: the least translation apart) stays within it. Where the start
+/// depth is what is allowed (a pair already deeper than the sink), the
+/// shifted shape starts apart by only the margin; without one it started
+/// a rounding apart, and the search halved its way down to a
+/// five-thousandth of the step before it could prove the start apart (a
+/// spinning mesh against a wall: 316 evaluations; with the margin
+/// `spinning_trimesh` 4.2 % fewer instructions, `ccd_pair_pass` 7.9 %,
+/// `fan_propellers` 3.1 %). `false` when the shifted shape does touch (the
 /// normal may just have turned: the caller samples) or nothing could be
 /// proved. Only for a convex target: against a mesh parry measures the
 /// depth along each triangle's own normal, which no single shift bounds (a
@@ -421,7 +428,7 @@ fn proved_within(
 ) -> bool {
     let (s1, m1, s2, m2) = (moving.shape, &moving.motion, target.shape, &target.motion);
     let c = start;
-    let back = -vec_from_glam(c.normal1) * (allowed * (1.0 + 1.0e-6));
+    let back = -vec_from_glam(c.normal1) * ((allowed + DEEPER) * (1.0 + 1.0e-6));
     let apart = QueryOptions {
         skin: 0.0,
         initial_contact: InitialContact::Report,
