@@ -204,11 +204,17 @@ fn distance_at(s1: &dyn Shape, m1: &Motion, s2: &dyn Shape, m2: &Motion, tau: f6
 /// The first τ at which parry sees the shapes touch (dense samples, then
 /// bisection), and the smallest sampled distance.
 fn sampled_truth(s1: &dyn Shape, m1: &Motion, s2: &dyn Shape, m2: &Motion) -> (Option<f64>, f64) {
+    first_touch(|t| distance_at(s1, m1, s2, m2, t))
+}
+
+/// The first τ at which `distance` is `≤ 0` (dense samples, then
+/// bisection), and the smallest sampled distance.
+fn first_touch(distance: impl Fn(f64) -> f64) -> (Option<f64>, f64) {
     let mut min = f64::INFINITY;
     let mut prev = 0.0;
     for i in 0..=SAMPLES {
         let t = i as f64 / SAMPLES as f64;
-        let d = distance_at(s1, m1, s2, m2, t);
+        let d = distance(t);
         min = min.min(d);
         if d <= 0.0 {
             if i == 0 {
@@ -217,7 +223,7 @@ fn sampled_truth(s1: &dyn Shape, m1: &Motion, s2: &dyn Shape, m2: &Motion) -> (O
             let (mut lo, mut hi) = (prev, t);
             for _ in 0..40 {
                 let mid = 0.5 * (lo + hi);
-                if distance_at(s1, m1, s2, m2, mid) <= 0.0 {
+                if distance(mid) <= 0.0 {
                     hi = mid
                 } else {
                     lo = mid
@@ -542,27 +548,6 @@ fn plate_landing_flat_on_a_fine_mesh() {
             .expect("parry supports the pair")
             .distance
     };
-    // The first touch: dense samples, then bisection.
-    let truth = |m: &Motion| {
-        let mut prev = 0.0;
-        for i in 0..=SAMPLES {
-            let t = i as f64 / SAMPLES as f64;
-            if gap64(m, t) <= 0.0 {
-                let (mut lo, mut hi) = (prev, t);
-                for _ in 0..40 {
-                    let mid = 0.5 * (lo + hi);
-                    if gap64(m, mid) <= 0.0 {
-                        hi = mid
-                    } else {
-                        lo = mid
-                    }
-                }
-                return Some(hi);
-            }
-            prev = t;
-        }
-        None
-    };
     let at_origin = fixed(Vector3::zeros());
     let mut rng = Rng::new(11);
     let (mut hits, mut wrong, mut evaluations) = (0, Vec::new(), 0);
@@ -582,7 +567,7 @@ fn plate_landing_flat_on_a_fine_mesh() {
         );
         let m = Motion::from_velocities(iso, Point3::from(start), v, rng.vector(2.0), DT).unwrap();
         let got = time_of_impact(&plate, &m, &mesh, &at_origin, &options()).expect("supported");
-        match (truth(&m), got) {
+        match (first_touch(|t| gap64(&m, t)).0, got) {
             (Some(t), Some(toi)) => {
                 hits += 1;
                 evaluations += toi.stats.pair_evaluations;
