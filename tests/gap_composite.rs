@@ -13,7 +13,7 @@ use affine_ccd::query::{
     QueryOptions, edge_edge_toi, is_supported, time_of_impact, vertex_face_toi,
 };
 use affine_ccd::{Arithmetic, Motion, RootStatus, Trajectory};
-use common::{Rng, quantile};
+use common::{Rng, pose64, quantile};
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
 use rapier3d::parry::math::{Pose, Vector};
 use rapier3d::parry::shape::{Ball, Cuboid, HeightField, Polyline, Shape, SharedShape, TriMesh};
@@ -538,12 +538,7 @@ fn plate_landing_flat_on_a_fine_mesh() {
     .expect("the same mesh");
     let plate64 = p64::shape::Cuboid::new(v64(plate.half_extents));
     let gap64 = |m: &Motion, tau: f64| {
-        let iso = m.pose_at(tau);
-        let (t, q) = (iso.translation.vector, iso.rotation);
-        let pose = p64::math::Pose::from_parts(
-            p64::math::Vector::new(t.x, t.y, t.z),
-            p64::math::Rotation::from_xyzw(q.i, q.j, q.k, q.w),
-        );
+        let pose = pose64(&m.pose_at(tau));
         p64::query::distance(&pose, &plate64, &p64::math::Pose::IDENTITY, &mesh64)
             .expect("parry supports the pair")
             .distance

@@ -46,7 +46,7 @@ mod common;
 
 use affine_ccd::query::{QueryOptions, time_of_impact};
 use affine_ccd::{Motion, RootStatus, Trajectory};
-use common::{Rng, quantile};
+use common::{Rng, pose64, quantile};
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
 use rapier3d::parry::math::Vector;
 use rapier3d::parry::shape::{
@@ -379,16 +379,6 @@ fn shape64(shape: &dyn Shape) -> Box<dyn p64::shape::Shape> {
         T::HalfSpace(h) => Box::new(s::HalfSpace::new(v(h.normal))),
         _ => unreachable!("only the convex kinds are generated"),
     }
-}
-
-/// An `f64` isometry as a parry3d-f64 pose (exact).
-fn pose64(iso: &Isometry3<f64>) -> p64::math::Pose {
-    let q = iso.rotation.quaternion();
-    let t = iso.translation.vector;
-    p64::math::Pose::from_parts(
-        p64::math::Vector::new(t.x, t.y, t.z),
-        p64::math::Rotation::from_xyzw(q.i, q.j, q.k, q.w),
-    )
 }
 
 /// `gap` in f64: the same shapes (converted exactly) through parry3d-f64

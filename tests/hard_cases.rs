@@ -2,8 +2,11 @@
 //! of the step, many turns per step, tiny and huge scales, far from the
 //! origin, and determinism. Inputs are f32 values, as rapier gives them.
 
+mod common;
+
 use affine_ccd::query::{QueryOptions, time_of_impact};
 use affine_ccd::{Arithmetic, Motion, RootStatus, Trajectory};
+use common::pose64;
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
 use rapier3d::parry::shape::Ball;
 
@@ -478,15 +481,8 @@ fn cylinder_box_report_and_touch(
         f64::from(half[1]),
         f64::from(half[2]),
     ));
-    let pose = |iso: &Isometry3<f64>| {
-        let (q, t) = (iso.rotation.quaternion(), iso.translation.vector);
-        p64::math::Pose::from_parts(
-            p64::math::Vector::new(t.x, t.y, t.z),
-            p64::math::Rotation::from_xyzw(q.i, q.j, q.k, q.w),
-        )
-    };
     let gap = |t: f64| {
-        p64::query::distance(&pose(&m1.pose_at(t)), &s1, &pose(&m2.pose_at(t)), &s2)
+        p64::query::distance(&pose64(&m1.pose_at(t)), &s1, &pose64(&m2.pose_at(t)), &s2)
             .unwrap()
             .distance
     };
@@ -667,12 +663,7 @@ fn a_cone_skimming_a_floor_box_is_not_touching() {
     );
     let least = (0..=1000)
         .map(|k| {
-            let at = cone_motion.pose_at(k as f64 / 1000.0);
-            let (t, q) = (at.translation.vector, at.rotation);
-            let p = parry3d_f64::math::Pose::from_parts(
-                parry3d_f64::math::Vector::new(t.x, t.y, t.z),
-                parry3d_f64::math::Rotation::from_xyzw(q.i, q.j, q.k, q.w),
-            );
+            let p = pose64(&cone_motion.pose_at(k as f64 / 1000.0));
             let identity = parry3d_f64::math::Pose::IDENTITY;
             parry3d_f64::query::distance(&p, &cone64, &identity, &floor64)
                 .unwrap()

@@ -132,3 +132,13 @@ pub fn assert_same_poses(
         );
     }
 }
+
+/// An `f64` isometry as a parry3d-f64 pose (exact), for truths computed in
+/// `f64`.
+pub fn pose64(iso: &nalgebra::Isometry3<f64>) -> parry3d_f64::math::Pose {
+    let (q, t) = (iso.rotation.quaternion(), iso.translation.vector);
+    parry3d_f64::math::Pose::from_parts(
+        parry3d_f64::math::Vector::new(t.x, t.y, t.z),
+        parry3d_f64::math::Rotation::from_xyzw(q.i, q.j, q.k, q.w),
+    )
+}
