@@ -32,6 +32,8 @@ pub(crate) struct CuboidTriangle {
     normal_len: f64,
     /// `(c1 − c0) × (c2 − c0)` in the triangle's frame.
     normal: Vector3<f64>,
+    /// The edges `c_{j+1} − c_j` in the triangle's frame.
+    edges: [Vector3<f64>; 3],
 }
 
 impl CuboidTriangle {
@@ -49,6 +51,7 @@ impl CuboidTriangle {
             edge_len,
             normal_len: up(up(normal.norm()) * (1.0 + 1e-12)),
             normal,
+            edges: [0, 1, 2].map(|j| corners[(j + 1) % 3] - corners[j]),
         }
     }
 
@@ -148,7 +151,12 @@ impl CuboidTriangle {
         if super::apart_by(out, axes, 0b1000) {
             return;
         }
-        let f = [v[1] - v[0], v[2] - v[1], v[0] - v[2]];
+        // The edges turned from the triangle's frame, as the normal is: the
+        // differences of the enclosed corners would carry the error of the
+        // relative translation twice (a tenth fewer evaluations on a slab
+        // landing on terrain).
+        let e = &self.edges;
+        let f = [rel.rotate(&e[0]), rel.rotate(&e[1]), rel.rotate(&e[2])];
         let zero = E::zero();
         for k in 0..3 {
             let (k1, k2) = ((k + 1) % 3, (k + 2) % 3);
