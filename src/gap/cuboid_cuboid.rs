@@ -5,7 +5,9 @@
 //! adaptive family (`support_map.rs`).
 //!
 //! Everything is seen from box `a`'s frame: `R = R_aᵀR_b` (columns are
-//! `b`'s axes) and `t = R_aᵀ(t_b − t_a)`. For an axis `L` the boxes are
+//! `b`'s axes) and `t = R_aᵀ(t_b − t_a)`, except the centres' offset along
+//! `b`'s own axes, `t·R_j`, which is read from the world poses as
+//! `(t_b − t_a)·b_j` (`a`'s turn then enters it once, not twice). For an axis `L` the boxes are
 //! apart by more than `s` when `|t·L| − r_a(L) − r_b(L) > s·|L|`, with
 //! `r(L) = Σ e_i·|L·axis_i|` each box's reach. The axes are `a`'s 3 face
 //! normals, `b`'s 3, and the 9 edge cross products `a_i × b_j`, kept
@@ -122,10 +124,13 @@ impl CuboidCuboid {
         if super::apart_by(out, axes, 0b111) {
             return;
         }
-        // b's faces: L = R_j.
+        // b's faces: L = R_j. The centres' offset along it from the world
+        // poses, `(t_b − t_a)·b_j`: `t·R_j` is the same product with `a`'s
+        // turn entering twice, once in each factor.
+        let d = b.pose.translation - a.pose.translation;
         for j in 0..3 {
             if axes >> (3 + j) & 1 != 0 {
-                let tl = E::dot([t.x, t.y, t.z], column(&r, j));
+                let tl = E::dot([d.x, d.y, d.z], column(&b.pose.rotation, j));
                 let ra = E::dot_f64(column(&abs, j), [ea.x, ea.y, ea.z]);
                 out[3 + j] = tl.abs() - ra - self.face_b[j];
             }

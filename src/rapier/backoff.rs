@@ -1494,7 +1494,7 @@ mod tests {
             Cuboid::new(Vector::new(0.05, 2.0, 2.0)),
         );
         let wall_motion = Motion::fixed(Isometry3::translation(1.0, 0.0, 0.0)).unwrap();
-        let (mut stopped, mut within) = (0, 0);
+        let (mut stopped, mut within, mut jumped) = (0, 0, 0);
         let mut rng = crate::rapier::testing::Numbers(0x2545_f491_4f6c_dd1d);
         let mut next = || rng.next(-1.0, 1.0);
         for case in 0..300 {
@@ -1551,12 +1551,28 @@ mod tests {
                 above > 0.0,
                 "case {case}: the stop is {above} past the stop gap"
             );
-            within += usize::from(above <= ACCEPT);
+            // Or the gap falls through the stop gap within a hundred-millionth
+            // of the step after the stop: parry's `f32` gap jumps there, and
+            // no time is closer. (In one case it read 5.0016 mm at the stop
+            // and 4.9722 mm just after, where parry3d-f64 reads 4.9722 mm at
+            // both: its `f32` distance 29 µm off at the stop.)
+            let later = flying.motion.pose_at(stop.fraction + 1.0e-8);
+            let jumps = crate::query::contact(
+                &pose_from_iso(&later),
+                &cube,
+                &pose_from_iso(&p2),
+                &wall,
+                1.0,
+            )
+            .unwrap()
+            .is_some_and(|c| (c.dist as f64) < SLOP);
+            jumped += usize::from(above > ACCEPT && jumps);
+            within += usize::from(above <= ACCEPT || jumps);
         }
         assert!(stopped > 250, "only {stopped} of 300 stopped");
         assert!(
-            within == stopped,
-            "{within} of {stopped} within {ACCEPT} m of the stop gap"
+            within == stopped && jumped <= 2,
+            "{within} of {stopped} within {ACCEPT} m of the stop gap or at a jump ({jumped})"
         );
     }
 
