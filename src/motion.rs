@@ -1030,12 +1030,15 @@ impl Advance {
         // eight corners: this runs for every pair such a bound is asked of.
         let mut terms: SmallVec<[(f64, f64, f64); 8]> = SmallVec::with_capacity(points.len());
         let (mut ahead, mut reach) = (f64::NEG_INFINITY, 0.0f64);
+        // `n·(k × w) = (n × k)·w`: the axis's products with `n` made once,
+        // not per point.
+        let (nk, n_k) = (n.cross(&k), n.dot(&k));
         for p in points {
             let w = motion.arm + motion.start_matrix * p;
             let along = n.dot(&w);
             ahead = ahead.max(along);
             reach = reach.max(w.norm());
-            terms.push((n.dot(&k.cross(&w)), n.dot(&k) * k.dot(&w) - along, along));
+            terms.push((nk.dot(&w), n_k * k.dot(&w) - along, along));
         }
         for term in &mut terms {
             term.2 = ahead - term.2;
