@@ -6,8 +6,8 @@
 //!
 //! Everything is seen from box `a`'s frame: `R = R_aᵀR_b` (columns are
 //! `b`'s axes) and `t = R_aᵀ(t_b − t_a)`, except the centres' offset along
-//! `b`'s own axes, `t·R_j`, which is read from the world poses as
-//! `(t_b − t_a)·b_j` (`a`'s turn then enters it once, not twice). For an axis `L` the boxes are
+//! `b`'s own axes, `t·R_j`, read from the world poses as `(t_b − t_a)·b_j`
+//! (`a`'s turn then enters it once, not twice). For an axis `L` the boxes are
 //! apart by more than `s` when `|t·L| − r_a(L) − r_b(L) > s·|L|`, with
 //! `r(L) = Σ e_i·|L·axis_i|` each box's reach. The axes are `a`'s 3 face
 //! normals, `b`'s 3, and the 9 edge cross products `a_i × b_j`, kept

@@ -7,7 +7,10 @@
 //! do not meet. The axes: the box's 3 face normals, the triangle's normal
 //! `n = (v1 − v0) × (v2 − v0)` and the 9 crosses `e_k × (v_{j+1} − v_j)`, all
 //! unnormalised (docs/design.md §4): near-parallel edges give `L ≈ 0`, never a
-//! false separation. This set is complete for touching, so with zero skin
+//! false separation. (Against a turning box the offset along the normal is
+//! read from the world poses, where the box's turn enters it once, and the
+//! edges are the triangle's own turned, not differences of enclosed
+//! corners.) This set is complete for touching, so with zero skin
 //! every axis `≤ 0` means the shapes touch: the family is exact. With a skin
 //! or a border, corners would count as close early (as for two boxes), so
 //! those pairs use the adaptive family.
@@ -152,7 +155,7 @@ impl CuboidTriangle {
             // it does not, its frame's product is as tight and cheaper.
             let d = if a.motion.turns() {
                 let nw = b.pose.rotate(&self.normal);
-                let p0 = b.pose.transform_point(&self.corners[0]) - a.pose.translation;
+                let p0 = b.pose.transform_point(&c[0]) - a.pose.translation;
                 E::dot([nw.x, nw.y, nw.z], [p0.x, p0.y, p0.z])
             } else {
                 n.dot(&v[0])

@@ -113,7 +113,7 @@ pub(super) fn touching_pair(
     // allowed depth itself.
     let proven = allowed + DEEPER;
     // The pair's points move too little relative to each other to get
-    // deeper than allowed: nothing to do. (parry's depth of a convex pair,
+    // deeper than that: nothing to do. (parry's depth of a convex pair,
     // or of each convex part of a composite one, is the distance of the
     // origin from the border of their Minkowski difference, whose points
     // `p − q` move no farther than this.)
