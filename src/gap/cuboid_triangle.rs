@@ -44,17 +44,16 @@ impl CuboidTriangle {
 
     pub fn new(half: Vector3<f64>, corners: [Vector3<f64>; 3]) -> CuboidTriangle {
         let reach = half.norm() + corners.iter().map(|c| c.norm()).fold(0.0, f64::max);
-        let edge_len =
-            [0, 1, 2].map(|j| up(up((corners[(j + 1) % 3] - corners[j]).norm()) * (1.0 + 1e-12)));
+        let edges = [0, 1, 2].map(|j| corners[(j + 1) % 3] - corners[j]);
         let normal = (corners[1] - corners[0]).cross(&(corners[2] - corners[0]));
         CuboidTriangle {
             half,
             corners,
             pad: up(ORTHO_SLACK * up(reach + 1.0)),
-            edge_len,
+            edge_len: edges.map(|e| up(up(e.norm()) * (1.0 + 1e-12))),
             normal_len: up(up(normal.norm()) * (1.0 + 1e-12)),
             normal,
-            edges: [0, 1, 2].map(|j| corners[(j + 1) % 3] - corners[j]),
+            edges,
         }
     }
 
