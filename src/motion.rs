@@ -840,12 +840,18 @@ impl Motion {
         let h = 1.0 / cells as f64;
         let between = padded(curvature * h * h / 8.0);
         let path = |t: f64| lin * t + quad * t * t;
-        let both = |t: f64| {
-            let (a, b) = (ours.farthest_turn(t, h), theirs.farthest_turn(t, h));
+        // The samples, in order: `τ = 0, h, 2h, …`.
+        let (mut our_turn, mut their_turn) = (
+            TurnSamples::new(ours.phi, h),
+            TurnSamples::new(theirs.phi, h),
+        );
+        let mut next = || {
+            let a = ours.next_turn(&mut our_turn, h);
+            let b = theirs.next_turn(&mut their_turn, h);
             (a.0 + b.0, a.1 + b.1)
         };
         let mut before = 0.0f64;
-        let mut ahead = both(0.0);
+        let mut ahead = next();
         for k in 1..=cells {
             let (t0, t) = ((k - 1) as f64 * h, k as f64 * h);
             // On each cell the greatest growth is at most the better of
@@ -855,7 +861,7 @@ impl Motion {
             // growth starts at 0 and the budget is 0: a pair leaving
             // along `n`). The path's own tangent bound takes `|quad|`, so
             // that it is convex too.
-            let here = both(t);
+            let here = next();
             let now = path(t) + here.0;
             let tangent = path(t0)
                 + (lin + 2.0 * quad * t0) * h
@@ -1028,8 +1034,10 @@ impl Advance {
         // start: `(A, B, n·w)`, the last made how far behind the farthest
         // point it starts once that is known. On the stack up to a box's
         // eight corners: this runs for every pair such a bound is asked of.
-        let mut terms: SmallVec<[(f64, f64, f64); 8]> = SmallVec::with_capacity(points.len());
-        let (mut ahead, mut reach) = (f64::NEG_INFINITY, 0.0f64);
+        // A motion that does not turn keeps no terms (its samples are 0,
+        // see `next_turn`), only their sizes: `A = 0` and `B = −n·w`.
+        let mut terms: SmallVec<[(f64, f64, f64); 8]> = SmallVec::new();
+        let (mut ahead, mut reach, mut turn) = (f64::NEG_INFINITY, 0.0f64, 0.0f64);
         // `n·(k × w) = (n × k)·w`: the axis's products with `n` made once,
         // not per point.
         let (nk, n_k) = (n.cross(&k), n.dot(&k));
@@ -1038,15 +1046,17 @@ impl Advance {
             let along = n.dot(&w);
             ahead = ahead.max(along);
             reach = reach.max(w.norm());
-            terms.push((nk.dot(&w), n_k * k.dot(&w) - along, along));
+            if phi > 0.0 {
+                let (a, b) = (nk.dot(&w), n_k * k.dot(&w) - along);
+                turn = turn.max(a.abs() + b.abs());
+                terms.push((a, b, along));
+            } else {
+                turn = turn.max(along.abs());
+            }
         }
         for term in &mut terms {
             term.2 = ahead - term.2;
         }
-        let turn = terms
-            .iter()
-            .map(|(a, b, _)| a.abs() + b.abs())
-            .fold(0.0, f64::max);
         let (lin, quad) = (n.dot(&motion.displacement), n.dot(&motion.bend));
         Advance {
             lin,
@@ -1058,11 +1068,23 @@ impl Advance {
         }
     }
 
-    /// At `tau`: the greatest advance of any point by the turn alone, less
-    /// its start behind the farthest, and the greatest of the same plus its
-    /// rate times `h` (the tangents' values one cell on).
-    fn farthest_turn(&self, tau: f64, h: f64) -> (f64, f64) {
-        let (s, c) = (self.phi * tau).sin_cos();
+    /// [`Advance::farthest_turn`] at the next of `samples`; `(0, 0)`
+    /// without a sample for a motion that does not turn (a fixed target),
+    /// which moves no point off its start.
+    #[inline]
+    fn next_turn(&self, samples: &mut TurnSamples, h: f64) -> (f64, f64) {
+        if self.phi == 0.0 {
+            return (0.0, 0.0);
+        }
+        self.farthest_turn(samples.next(), h)
+    }
+
+    /// At the time whose `sin φτ` and `cos φτ` are `(s, c)`: the greatest
+    /// advance of any point by the turn alone, less its start behind the
+    /// farthest, and the greatest of the same plus its rate times `h` (the
+    /// tangents' values one cell on).
+    #[inline]
+    fn farthest_turn(&self, (s, c): (f64, f64), h: f64) -> (f64, f64) {
         self.terms.iter().fold(
             (f64::NEG_INFINITY, f64::NEG_INFINITY),
             |(value, tangent), (a, b, behind)| {
@@ -1071,6 +1093,55 @@ impl Advance {
                 (value.max(g), tangent.max(g + rate * h))
             },
         )
+    }
+}
+
+/// `(sin φτ, cos φτ)` at the sample times `τ = 0, h, 2h, …` of
+/// [`Motion::points_approach_within`], in turn: each turned from the last
+/// by the cell's angle `φh` (angle addition), and libm's own every
+/// [`TurnSamples::RESYNC`] samples. libm's call per sample was half a
+/// percent of a slab landing on terrain. Each turn costs about four
+/// roundings, so a sample is within about 64 ulps of 1 of libm's (and the
+/// angles' own rounding grows no faster than libm's argument's); the
+/// samples' slack, `1e-12` of the terms' sizes, still covers that many
+/// times over.
+struct TurnSamples {
+    phi: f64,
+    h: f64,
+    /// The next sample's index.
+    k: usize,
+    /// The last sample.
+    last: (f64, f64),
+    /// `(sin φh, cos φh)`.
+    step: (f64, f64),
+}
+
+impl TurnSamples {
+    /// How many samples apart libm is asked again.
+    const RESYNC: usize = 16;
+
+    fn new(phi: f64, h: f64) -> TurnSamples {
+        TurnSamples {
+            phi,
+            h,
+            k: 0,
+            last: (0.0, 1.0),
+            step: (phi * h).sin_cos(),
+        }
+    }
+
+    /// The next sample: at `τ = 0` exactly `(0, 1)`.
+    #[inline]
+    fn next(&mut self) -> (f64, f64) {
+        let (s, c) = self.last;
+        let (sh, ch) = self.step;
+        self.last = match self.k {
+            0 => (0.0, 1.0),
+            k if k % TurnSamples::RESYNC == 0 => (self.phi * (k as f64 * self.h)).sin_cos(),
+            _ => (s * ch + c * sh, c * ch - s * sh),
+        };
+        self.k += 1;
+        self.last
     }
 }
 
