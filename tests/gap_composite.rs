@@ -10,7 +10,8 @@ mod common;
 
 use affine_ccd::convert::pose_from_iso;
 use affine_ccd::query::{
-    QueryOptions, edge_edge_toi, is_supported, time_of_impact, vertex_face_toi,
+    QueryOptions, ShapeMotion, edge_edge_toi, is_supported, time_of_impact, time_of_impact_many,
+    vertex_face_toi,
 };
 use affine_ccd::{Arithmetic, Motion, RootStatus, Trajectory};
 use common::{Rng, pose64, quantile};
@@ -513,6 +514,97 @@ fn slab_onto_a_thousand_triangle_terrain() {
             );
         }
     }
+}
+
+/// A mesh's triangles handed over as targets of their own (as the rapier
+/// stage hands a mesh's nearby triangles to a search) move alike, and
+/// the search gives them one frame and keeps their relative poses per
+/// node. Every third triangle moves differently, which breaks the runs of
+/// shared frames: a tumbling box falling onto them is reported hitting
+/// when and where the earliest of the single queries, one triangle each,
+/// says, within the queries' accuracy.
+#[test]
+fn triangles_as_targets_of_their_own_agree_with_single_queries() {
+    let mesh = grid_mesh(6, 6, 3.0, 3.0, terrain_height);
+    let triangles: Vec<_> = mesh.triangles().collect();
+    let at_origin = fixed(Vector3::zeros());
+    // Every third triangle lifted by 5 cm: frames of their own, the
+    // others two by two.
+    let lifted = fixed(Vector3::new(0.0, 0.05, 0.0));
+    let target_motion = |k: usize| if k % 3 == 1 { lifted } else { at_origin };
+    let cuboid = Cuboid::new(Vector::new(0.4, 0.1, 0.3));
+    let options = options();
+    let mut rng = Rng::new(17);
+    let (mut hits, mut both_miss) = (0, 0);
+    for case in 0..40 {
+        let start = Vector3::new(
+            rng.range(-1.0, 1.0),
+            rng.range(0.8, 1.5),
+            rng.range(-1.0, 1.0),
+        );
+        let v = Vector3::new(
+            rng.range(-20.0, 20.0),
+            rng.range(-150.0, -40.0),
+            rng.range(-20.0, 20.0),
+        );
+        let w = rng.vector(30.0);
+        let m = motion(&mut rng, start, v, w);
+        let targets: Vec<ShapeMotion> = triangles
+            .iter()
+            .enumerate()
+            .map(|(k, t)| ShapeMotion {
+                shape: t,
+                motion: target_motion(k),
+            })
+            .collect();
+        let moving = [ShapeMotion {
+            shape: &cuboid,
+            motion: m,
+        }];
+        let many = time_of_impact_many(&moving, &targets, &options).expect("supported");
+        let singles: Vec<Option<f64>> = triangles
+            .iter()
+            .enumerate()
+            .map(|(k, t)| {
+                time_of_impact(&cuboid, &m, t, &target_motion(k), &options)
+                    .expect("supported")
+                    .map(|toi| toi.fraction)
+            })
+            .collect();
+        let earliest = singles
+            .iter()
+            .flatten()
+            .copied()
+            .fold(None, |best: Option<f64>, t| {
+                Some(best.map_or(t, |b| b.min(t)))
+            });
+        match (many, earliest) {
+            (Some(hit), Some(first)) => {
+                hits += 1;
+                let t = hit.toi.fraction;
+                assert!(
+                    (t - first).abs() <= 2.0 * options.epsilon,
+                    "case {case}: the search says {t}, the single queries {first}"
+                );
+                let own = singles[hit.target].expect("the hit triangle's own query hits too");
+                assert!(
+                    own <= t + 2.0 * options.epsilon,
+                    "case {case}: triangle {} hit at {t}, alone at {own}",
+                    hit.target
+                );
+            }
+            (None, None) => both_miss += 1,
+            (many, single) => panic!(
+                "case {case}: the search says {:?}, the single queries {single:?}",
+                many.map(|h| h.toi.fraction)
+            ),
+        }
+    }
+    println!("triangles as targets: {hits} hits, {both_miss} misses of 40");
+    assert!(
+        hits >= 20 && both_miss >= 1,
+        "{hits} hits, {both_miss} misses"
+    );
 }
 
 /// A plate landing nearly flat on a fine mesh meets hundreds of triangles

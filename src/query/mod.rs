@@ -52,6 +52,7 @@ use frames::{FrameBuffers, FrameDef};
 use nalgebra::{Point3, Vector3};
 use pairs::{CompositePair, PairContent, PairEntry, Search, Searched};
 use rapier3d::parry::shape::Shape;
+use smallvec::SmallVec;
 
 /// How a query searches.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -324,7 +325,8 @@ impl Query {
         let solve_options = options.solve_options()?;
         // Built before the advancement, so that a pair the crate cannot
         // search is an error whatever the advancement finds.
-        let pairs = pairs_of(moving, targets, options.skin)?;
+        let frames = target_frames(moving.len(), targets);
+        let pairs = pairs_of(moving, targets, &frames, options.skin)?;
         // Pairs that turn fast are first advanced to where they may come
         // close (see `advance`): the search starts at the earliest such
         // time, and is not needed at all if every pair stays apart. Where
@@ -360,7 +362,7 @@ impl Query {
             mut outcome,
             mut hit,
             evaluated,
-        } = self.search(moving, targets, pairs, options, &first)?;
+        } = self.search(moving, targets, &frames, pairs, options, &first)?;
         self.spent_by_family = evaluated;
         if hit.is_none() && touch_by < span.hi {
             // The overlap at `touch_by` (GJK's, in `f64`) should have left
@@ -371,9 +373,9 @@ impl Query {
                 start_apart: false,
                 ..solve_options
             };
-            let pairs = pairs_of(moving, targets, options.skin)?;
+            let pairs = pairs_of(moving, targets, &frames, options.skin)?;
             let stats = outcome.stats;
-            let rest = self.search(moving, targets, pairs, options, &rest)?;
+            let rest = self.search(moving, targets, &frames, pairs, options, &rest)?;
             (outcome, hit) = (rest.outcome, rest.hit);
             outcome.stats += stats;
             self.spent_by_family += rest.evaluated;
@@ -397,6 +399,7 @@ impl Query {
         &mut self,
         moving: &[ShapeMotion],
         targets: &[ShapeMotion],
+        target_frames: &[(u32, bool)],
         pairs: Vec<PairEntry<'s>>,
         options: &QueryOptions,
         solve_options: &SolveOptions,
@@ -406,9 +409,13 @@ impl Query {
         frames
             .defs
             .extend(moving.iter().map(|m| FrameDef::root(m.motion)));
-        frames
-            .defs
-            .extend(targets.iter().map(|t| FrameDef::root(t.motion)));
+        // One frame per target, but one for a run of targets that move
+        // alike (as `pairs_of` numbered them).
+        for (t, &(frame, _)) in targets.iter().zip(target_frames) {
+            if frame as usize == frames.defs.len() {
+                frames.defs.push(FrameDef::root(t.motion));
+            }
+        }
         options.arithmetic.dispatch(Search {
             solver: &mut self.solver,
             frames,
@@ -419,17 +426,47 @@ impl Query {
     }
 }
 
+/// Each target's frame, and whether another target shares it: the
+/// moving shapes' frames come first, then one per target, except that a
+/// convex target moving exactly as the one before it shares that one's
+/// frame (the triangles of a mesh a caller splits into targets of their
+/// own), so that the search encloses their pose and the relative poses
+/// their pairs read once per node, not once per pair. (A composite keeps
+/// its own: its parts' frames are its frame's children.)
+fn target_frames(moving: usize, targets: &[ShapeMotion]) -> SmallVec<[(u32, bool); 8]> {
+    let mut frames: SmallVec<[(u32, bool); 8]> = SmallVec::with_capacity(targets.len());
+    let mut next = moving as u32;
+    for (j, t) in targets.iter().enumerate() {
+        let alike = j > 0 && {
+            let before = &targets[j - 1];
+            t.motion == before.motion
+                && !composite::is_composite(t.shape)
+                && !composite::is_composite(before.shape)
+        };
+        if alike {
+            let last = frames.len() - 1;
+            frames[last].1 = true;
+            frames.push((frames[last].0, true));
+        } else {
+            frames.push((next, false));
+            next += 1;
+        }
+    }
+    frames
+}
+
 /// Every moving shape against every target, as the search's pairs (the
-/// moving shapes' frames first, then the targets').
+/// moving shapes' frames first, then the targets', see [`target_frames`]).
 fn pairs_of<'s>(
     moving: &[ShapeMotion<'s>],
     targets: &[ShapeMotion<'s>],
+    frames: &[(u32, bool)],
     skin: f64,
 ) -> Result<Vec<PairEntry<'s>>, CcdError> {
     let mut pairs = Vec::with_capacity(moving.len() * targets.len());
     for (i, m) in moving.iter().enumerate() {
         for (j, t) in targets.iter().enumerate() {
-            let (a, b) = (i as u32, (moving.len() + j) as u32);
+            let (a, (b, shares_frames)) = (i as u32, frames[j]);
             let mut blind = f64::INFINITY;
             let kind = if composite::is_composite(m.shape) || composite::is_composite(t.shape) {
                 composite::check_leaves(m.shape, t.shape, skin)?;
@@ -447,6 +484,7 @@ fn pairs_of<'s>(
                 b,
                 balls,
                 piece: None,
+                shares_frames,
                 blind_width: blind,
                 moving: i as u32,
                 target: j as u32,

@@ -157,6 +157,11 @@ pub(super) struct PairEntry<'s> {
     /// and its box in that pair's split frame, for the test it passed
     /// when it was split off, asked again on later nodes (see `eval`).
     pub piece: Option<Piece>,
+    /// Other pairs have the same two frames: the caller's targets that
+    /// move alike (a mesh's triangles, each a target of its own) share
+    /// one frame, as a split composite's pieces do, and keep their
+    /// relative poses and exact poses for the node.
+    pub shares_frames: bool,
     /// The widest node a leaf pair's family is evaluated on, a fraction
     /// of the step (see [`BLIND_TURN`]); infinite for composites.
     pub blind_width: f64,
@@ -367,6 +372,7 @@ impl<'s, E: Enclosure> PairSet<'s, E> {
             b: b.frame,
             balls: None,
             piece: Some(piece),
+            shares_frames: false,
             blind_width: blind,
             moving,
             target,
@@ -534,12 +540,14 @@ impl<E: Enclosure> GapSet<E> for PairSet<'_, E> {
                 self.frames.enclose(fa, span);
                 self.frames.enclose(fb, span);
                 // The pieces of a split composite share their frames (a box
-                // against each triangle of a mesh): the relative poses their
-                // family reads are kept for the node. A pair of the
-                // caller's is the only one between its frames.
-                let [b_in_a, a_in_b] = match entry.piece {
-                    Some(_) => self.frames.keep_relatives(gap.reads_relative(), [fa, fb]),
-                    None => [None, None],
+                // against each triangle of a mesh), as do the caller's
+                // targets that move alike: the relative poses their family
+                // reads are kept for the node.
+                let shared = entry.piece.is_some() || entry.shares_frames;
+                let [b_in_a, a_in_b] = if shared {
+                    self.frames.keep_relatives(gap.reads_relative(), [fa, fb])
+                } else {
+                    [None, None]
                 };
                 let relative = Relative {
                     b_in_a: b_in_a.map(|kept| self.frames.kept_relative(kept)),
@@ -548,7 +556,7 @@ impl<E: Enclosure> GapSet<E> for PairSet<'_, E> {
                 // So do their exact poses at the node's middle (a lone
                 // pair reads each once, nothing to keep, unless its middle
                 // was just tested).
-                let keeps = entry.piece.is_some() || piece_of_spin;
+                let keeps = shared || piece_of_spin;
                 let kept = |f| keeps.then(|| self.frames.kept(f));
                 let a = Side {
                     pose: self.frames.pose_of(fa),
