@@ -15,6 +15,7 @@ use crate::hashing::{FastMap, FastSet};
 use crate::query::QueryOptions;
 use rapier3d::parry::bounding_volume::Aabb;
 use rapier3d::prelude::{QueryFilter, RigidBodyHandle, Vector};
+use smallvec::SmallVec;
 
 /// Most bodies one step's pushers carry.
 const MAX_CARRIED: usize = 64;
@@ -53,6 +54,7 @@ pub(super) fn push(
     let mut seen: FastSet<RigidBodyHandle> = front.clone();
     let mut fresh: FastSet<RigidBodyHandle> = front.clone();
     let mut velocities: FastMap<RigidBodyHandle, Vector> = FastMap::default();
+    let mut start_boxes = StartBoxes::default();
     let boxes: Vec<_> = current
         .iter()
         .filter(|m| m.pusher)
@@ -62,7 +64,17 @@ pub(super) fn push(
         gather_near(q, current, &mut seen, b, &mut cands);
     }
     while out.len() < MAX_CARRIED {
-        sweep_candidates(q, opts, current, &mut cands, front, &fresh, ws, report);
+        sweep_candidates(
+            q,
+            opts,
+            current,
+            &mut cands,
+            front,
+            &fresh,
+            &mut start_boxes,
+            ws,
+            report,
+        );
         fresh.clear();
         // The earliest impact of any candidate is carried first.
         let Some(k) = (0..cands.len())
@@ -100,6 +112,28 @@ pub(super) fn push(
         }
     }
     out
+}
+
+/// The bodies' boxes at the start of their motions, each made once per
+/// push: a carry changes where a body ends, never where it starts, and
+/// every candidate is held against every front member again after each
+/// carry (a paddle pushing six boxes in a row: 1.4 % of that scene's
+/// instructions).
+/// A short list, looked up in turn: a push meets a handful of bodies,
+/// where a hash map's set-up cost more than the boxes it saved (pinball's
+/// flippers).
+#[derive(Default)]
+struct StartBoxes(SmallVec<[(RigidBodyHandle, Option<Aabb>); 8]>);
+
+impl StartBoxes {
+    fn of(&mut self, scene: &StageWorld, m: &Moved) -> Option<Aabb> {
+        if let Some((_, b)) = self.0.iter().find(|(h, _)| *h == m.handle) {
+            return *b;
+        }
+        let b = start_box(scene, m);
+        self.0.push((m.handle, b));
+        b
+    }
 }
 
 /// Adds as candidates the dynamic bodies not seen yet whose colliders
@@ -167,6 +201,7 @@ fn sweep_candidates(
     cands: &mut [Cand],
     front: &FastSet<RigidBodyHandle>,
     fresh: &FastSet<RigidBodyHandle>,
+    start_boxes: &mut StartBoxes,
     ws: &mut Workspace,
     report: &mut CcdReport,
 ) {
@@ -180,12 +215,20 @@ fn sweep_candidates(
             continue;
         }
         let body = &current[c.i];
-        // Its start box, once for all the members it is held against.
-        let at_start = start_box(scene, body);
+        let at_start = start_boxes.of(scene, body);
         if !set.iter().any(|h| {
-            motions
-                .body(*h)
-                .is_none_or(|m| may_meet(scene, body, at_start.as_ref(), m, reach, q.dt))
+            motions.body(*h).is_none_or(|m| {
+                let member = start_boxes.of(scene, m);
+                may_meet(
+                    scene,
+                    body,
+                    at_start.as_ref(),
+                    m,
+                    member.as_ref(),
+                    reach,
+                    q.dt,
+                )
+            })
         }) {
             continue;
         }
@@ -226,7 +269,8 @@ fn sweep_candidates(
 }
 
 /// Whether `body` (its start box `at_start`) may come within `reach` of
-/// front member `member` during the step: their start boxes are apart by no more than the two can move
+/// front member `member` (its start box `member_box`) during the step:
+/// their start boxes are apart by no more than the two can move
 /// relative to each other ([`relative_travel`]), with a millimetre to
 /// spare for parry's `f32` gaps. A body farther than that can neither
 /// touch the member at the start nor meet it later, so its sweep against
@@ -239,19 +283,20 @@ fn may_meet(
     body: &Moved,
     at_start: Option<&Aabb>,
     member: &Moved,
+    member_box: Option<&Aabb>,
     reach: f64,
     dt: f64,
 ) -> bool {
     let (Some(a), Some(b), Some(ra), Some(rb)) = (
         at_start,
-        start_box(scene, member),
+        member_box,
         scene.bodies.get(body.handle),
         scene.bodies.get(member.handle),
     ) else {
         return true;
     };
     let bound = relative_travel(body, ra, member, rb, dt) + reach + 1.0e-3;
-    let gap = sweep::box_gap(a, &b);
+    let gap = sweep::box_gap(a, b);
     // A gap or bound that came out NaN proves nothing.
     gap <= bound || gap.is_nan() || bound.is_nan()
 }
@@ -341,13 +386,14 @@ mod tests {
                 config: &config,
                 slop: 0.0,
             };
-            let body = &self.records[0];
-            let at_start = start_box(&scene, body);
+            let (body, member) = (&self.records[0], &self.records[1]);
+            let (at_start, member_box) = (start_box(&scene, body), start_box(&scene, member));
             may_meet(
                 &scene,
                 body,
                 at_start.as_ref(),
-                &self.records[1],
+                member,
+                member_box.as_ref(),
                 reach,
                 self.dt,
             )
