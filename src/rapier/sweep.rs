@@ -115,6 +115,44 @@ pub(crate) struct Workspace {
     /// The collider pairs the last step's clamps held at their start
     /// (moving collider, target), either way round (see [`HELD`]).
     held: FastSet<(ColliderHandle, ColliderHandle)>,
+    /// The pairs of moving colliders this round's sweeps proved apart.
+    apart: ProvedApart,
+}
+
+/// The pairs of moving colliders (moving, target) a sweep proved to stay
+/// out of contact over the whole span, on the motions and options it was
+/// proved under: when the target's own sweep meets the moving collider
+/// under the same ones, the pair is already settled (two fast bodies
+/// flying past each other were searched once from each side: in the
+/// bounce houses, most of the searches that found nothing). A pair that
+/// never touches gives no event either way round: no stop, no touching
+/// pair sinking deeper than allowed, no rounded pair getting as deep as
+/// rapier's stop.
+#[derive(Default)]
+struct ProvedApart {
+    /// `StepMotions::id`, and the span and skin's bits.
+    under: Option<(u64, [u64; 3])>,
+    pairs: FastSet<(ColliderHandle, ColliderHandle)>,
+}
+
+impl ProvedApart {
+    /// Forgets the pairs proved under other motions or options.
+    fn under(&mut self, motions: &StepMotions, opts: &QueryOptions) {
+        let span = opts.time_range;
+        let key = (
+            motions.id(),
+            [span.lo.to_bits(), span.hi.to_bits(), opts.skin.to_bits()],
+        );
+        if self.under != Some(key) {
+            self.pairs.clear();
+            self.under = Some(key);
+        }
+    }
+
+    /// Whether `target`'s sweep proved it apart from `moving`.
+    fn proved(&self, moving: ColliderHandle, target: ColliderHandle) -> bool {
+        !self.pairs.is_empty() && self.pairs.contains(&(target, moving))
+    }
 }
 
 /// A clamp at most this share into the step holds its body at its start.
@@ -189,6 +227,7 @@ fn earliest(
     opts: &QueryOptions,
     rules: &HandBack,
     triangles: &mut Vec<MeshPiece>,
+    apart: &mut Few<usize>,
     report: &mut CcdReport,
 ) -> Result<Option<Earliest>, CcdError> {
     // Fixed meshes near a slow shape, or a fast one whose path meets only
@@ -223,6 +262,7 @@ fn earliest(
             origin.push(j);
         }
     }
+    let unsplit = origin.len();
     // Unsplit targets go as they are (a motion is 240 bytes); `origin` is
     // then the identity.
     let (mut pieces, mut piece_travels, mut piece_contacts) =
@@ -255,7 +295,26 @@ fn earliest(
             origin.extend(split);
             (&pieces, &piece_travels, &piece_contacts)
         };
-    let found = earliest_piece(moving, pieces, travels, contacts_only, opts, rules, report)?;
+    // The targets proved to stay out of contact over the span: an unsplit
+    // one as its piece was (the unsplit ones come first, in order); a
+    // split one never (each triangle is asked on its own).
+    let mut pieces_apart = Few::new();
+    let found = earliest_piece(
+        moving,
+        pieces,
+        travels,
+        contacts_only,
+        opts,
+        rules,
+        &mut pieces_apart,
+        report,
+    )?;
+    apart.extend(
+        pieces_apart
+            .iter()
+            .filter(|&&p| p < unsplit)
+            .map(|&p| origin[p]),
+    );
     Ok(found.map(|e| Earliest {
         target: origin[e.target],
         ..e
@@ -273,6 +332,7 @@ fn earliest_piece(
     contacts_only: &[bool],
     opts: &QueryOptions,
     rules: &HandBack,
+    apart: &mut Few<usize>,
     report: &mut CcdReport,
 ) -> Result<Option<Earliest>, CcdError> {
     let mut best: Option<Earliest> = None;
@@ -408,14 +468,15 @@ fn earliest_piece(
             // closing along the axis the boxes are farthest apart along (a
             // blade spinning beside a wall). A ball's or a straight
             // flyer's travel says as much, and the test would only cost.
-            let apart = box_gap(&moving_box, &target_box);
-            if apart > pair_relative_travel(moving.shape, &moving.motion, t.shape, &t.motion)
+            let gap = box_gap(&moving_box, &target_box);
+            if gap > pair_relative_travel(moving.shape, &moving.motion, t.shape, &t.motion)
                 || (moving.motion.turns()
                     && moving.shape.as_ball().is_none()
                     && moving.shape.is_convex()
                     && t.shape.is_convex()
                     && apart_along(moving, t, box_axis(&moving_box, &target_box)))
             {
+                apart.push(j);
                 continue;
             }
             alive.push(j);
@@ -451,6 +512,7 @@ fn earliest_piece(
                 Ok(StartContact::ApartAlong { direction, .. })
                     if apart_along(moving, t, direction) =>
                 {
+                    apart.push(j);
                     continue;
                 }
                 // Beyond the band and not shown to stay apart along the
@@ -473,8 +535,8 @@ fn earliest_piece(
                 }
             }
             // Nothing within `far` either: apart, as `stays_apart` finds.
-            Some((_, None)) if convex => {}
-            Some((_, contact)) if stays_apart(t, contact.as_ref()) => {}
+            Some((_, None)) if convex => apart.push(j),
+            Some((_, contact)) if stays_apart(t, contact.as_ref()) => apart.push(j),
             _ => alive.push(j),
         }
     }
@@ -512,7 +574,13 @@ fn earliest_piece(
             })
             .collect();
         let found = search::found(std::slice::from_ref(moving), &set, &contact, report)?;
-        let Some(hit) = found else { break };
+        let Some(hit) = found else {
+            // No contact over the whole span: apart.
+            if until == opts.time_range.hi {
+                apart.extend_from_slice(&alive);
+            }
+            break;
+        };
         let j = alive[hit.target];
         let t = &targets[j];
         let status = hit.outcome.status;
@@ -666,6 +734,7 @@ pub(crate) fn sweep_body(
     let Some(rb) = scene.bodies.get(body.handle) else {
         return Ok(None);
     };
+    ws.apart.under(motions, opts);
     let mut best: Option<BodyHit> = None;
     for &h1 in rb.colliders() {
         let Some(co1) = scene.colliders.get(h1).filter(|c| c.is_enabled()) else {
@@ -774,6 +843,10 @@ pub(crate) fn sweep_body(
         let mut handles: Few<ColliderHandle> = Few::with_capacity(ws.candidates.len());
         let mut held: Few<bool> = Few::with_capacity(ws.candidates.len());
         for c in &ws.candidates {
+            let solid_pair = matches!(c.interaction, Interaction::Solid);
+            if solid_pair && ws.apart.proved(h1, c.handle) {
+                continue;
+            }
             let co2 = &scene.colliders[c.handle];
             let motion2 = ws.motions.get(motions, c.handle, co2, scene.bodies)?;
             match c.interaction {
@@ -801,15 +874,28 @@ pub(crate) fn sweep_body(
             shape: co1.shape(),
             motion: motion1,
         };
-        if let Some(e) = earliest(
+        let mut apart = Few::new();
+        let found = earliest(
             &moving,
             &solid,
             &held,
             opts,
             &scene.hand_back(),
             &mut ws.triangles,
+            &mut apart,
             report,
-        )? {
+        )?;
+        // Kept for the targets that are swept themselves (fast bodies).
+        for &h2 in apart.iter().map(|&j| &handles[j]) {
+            let swept = scene.colliders[h2]
+                .parent()
+                .and_then(|b| motions.body(b))
+                .is_some_and(|m| m.fast);
+            if swept {
+                ws.apart.pairs.insert((h1, h2));
+            }
+        }
+        if let Some(e) = found {
             if best.is_none_or(|b| e.toi.fraction < b.toi.fraction) {
                 best = Some(BodyHit {
                     toi: e.toi,
