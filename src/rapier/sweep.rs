@@ -220,6 +220,7 @@ struct Earliest {
 ///
 /// `held` marks the targets whose pair the last step held at its start
 /// (see [`HELD`]): they are the contacts', as touching pairs are.
+#[allow(clippy::too_many_arguments)]
 fn earliest(
     moving: &ShapeMotion,
     targets: &[ShapeMotion],
@@ -325,6 +326,7 @@ fn earliest(
 /// pair's travel (`pair_travel`); `contacts_only` marks those rapier's CCD
 /// leaves to its contacts, and those the last step held at their start
 /// (only `touching_pair`'s check that they do not sink deep applies).
+#[allow(clippy::too_many_arguments)]
 fn earliest_piece(
     moving: &ShapeMotion,
     targets: &[ShapeMotion],
