@@ -182,6 +182,41 @@ fn bodies_moving_together_are_left_to_contacts() {
     }
 }
 
+/// Two fast balls whose paths cross at right angles, one passing the
+/// crossing 0.45 m ahead of the other: their swept boxes meet, but the
+/// first one's sweep proves them apart over the step, and the other's
+/// takes that answer instead of searching the pair again, so it counts
+/// once; neither is stopped. On a collision course instead the pair is
+/// searched from both sides (a hit is not taken over) and stopped.
+#[test]
+fn two_fast_bodies_proved_apart_are_searched_once() {
+    let ball = || ColliderBuilder::ball(0.1);
+    let flying =
+        |at: Vector, velocity: Vector| RigidBodyBuilder::dynamic().translation(at).linvel(velocity);
+    let crossing = |x: f32| {
+        let mut run = Run::new(Ccd::Affine, Vector::ZERO);
+        run.dynamic(
+            flying(Vector::new(-0.5, 0.0, 0.0), Vector::new(60.0, 0.0, 0.0)),
+            ball(),
+        );
+        run.dynamic(
+            flying(Vector::new(x, 0.0, 0.5), Vector::new(0.0, 0.0, -60.0)),
+            ball(),
+        );
+        run.step();
+        run.stage.as_ref().unwrap().report().clone()
+    };
+    let passing = crossing(0.45);
+    assert_eq!(passing.bodies_swept, 2, "{passing:?}");
+    assert_eq!(passing.pairs, 1, "{passing:?}");
+    assert_eq!(passing.clamps(), 0, "{passing:?}");
+
+    // The second ball at the crossing when the first is.
+    let meeting = crossing(0.0);
+    assert!(meeting.clamps() > 0, "{meeting:?}");
+    assert!(meeting.pairs >= 2, "{meeting:?}");
+}
+
 #[test]
 fn a_cone_at_200_m_s_stops_at_a_thin_wall() {
     let rapier_tunnels = wall_scenario(

@@ -43,7 +43,9 @@ pub struct SkippedBody {
 pub struct CcdReport {
     /// Fast bodies swept.
     pub bodies_swept: usize,
-    /// Collider pairs handed to the time-of-impact query.
+    /// Collider pairs handed to the time-of-impact query (a pair of two
+    /// fast colliders counts once when one's sweep proves them apart over
+    /// the whole step: the other's takes that answer).
     pub pairs: usize,
     /// Pairs of a sweep against everything (a fast body's first) whose
     /// bodies move together: no point of one nears or leaves the other by

@@ -844,9 +844,11 @@ pub(crate) fn sweep_body(
         let mut solid: FewMotions = FewMotions::with_capacity(ws.candidates.len());
         let mut handles: Few<ColliderHandle> = Few::with_capacity(ws.candidates.len());
         let mut held: Few<bool> = Few::with_capacity(ws.candidates.len());
+        let mut settled = 0;
         for c in &ws.candidates {
             let solid_pair = matches!(c.interaction, Interaction::Solid);
             if solid_pair && ws.apart.proved(h1, c.handle) {
+                settled += 1;
                 continue;
             }
             let co2 = &scene.colliders[c.handle];
@@ -868,7 +870,7 @@ pub(crate) fn sweep_body(
                 }),
             }
         }
-        report.pairs += ws.candidates.len();
+        report.pairs += ws.candidates.len() - settled;
         if solid.is_empty() {
             continue;
         }
