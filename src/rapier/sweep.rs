@@ -219,7 +219,9 @@ struct Earliest {
 /// those next step exactly as they would without CCD.
 ///
 /// `held` marks the targets whose pair the last step held at its start
-/// (see [`HELD`]): they are the contacts', as touching pairs are.
+/// (see [`HELD`]): they are the contacts', as touching pairs are. `apart`
+/// gets the targets proved to stay out of contact over the whole span
+/// (see [`ProvedApart`]).
 #[allow(clippy::too_many_arguments)]
 fn earliest(
     moving: &ShapeMotion,
@@ -326,6 +328,7 @@ fn earliest(
 /// pair's travel (`pair_travel`); `contacts_only` marks those rapier's CCD
 /// leaves to its contacts, and those the last step held at their start
 /// (only `touching_pair`'s check that they do not sink deep applies).
+/// The targets proved apart over the whole span are pushed to `apart`.
 #[allow(clippy::too_many_arguments)]
 fn earliest_piece(
     moving: &ShapeMotion,
