@@ -310,8 +310,7 @@ mod tests {
     /// `skin_norm_const` is an upper bound of `skin·|w|`, and a tight one:
     /// on vectors whose length is exact (integer quadruples `a² + b² + c² =
     /// d²`, scaled by powers of two) against skins of every size, it is at
-    /// least the exact product and within a few parts in 10¹³ of it; a
-    /// negative skin gets an upper bound too.
+    /// least the exact product and within a few parts in 10¹³ of it.
     #[test]
     fn skin_norm_const_bounds_the_exact_product_from_above() {
         let quadruples = [

@@ -119,6 +119,7 @@ pub(super) fn push(
 /// every candidate is held against every front member again after each
 /// carry (a paddle pushing six boxes in a row: 1.4 % of that scene's
 /// instructions).
+///
 /// A short list, looked up in turn: a push meets a handful of bodies,
 /// where a hash map's set-up cost more than the boxes it saved (pinball's
 /// flippers).
