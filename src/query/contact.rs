@@ -36,7 +36,9 @@ use rapier3d::parry::shape::{
 /// depth grows with the distance from the plane's origin): the half-space
 /// is asked first and the answer flipped back. Boxes and triangles that
 /// overlap, alone or as parts of meshes, heightfields and compounds, are
-/// answered by their separating axes instead of EPA ([`AxesFirst`]).
+/// answered by their separating axes instead of EPA ([`AxesFirst`]); a
+/// capsule or rounded box against a polytope by their cores, as rapier's
+/// contacts measure it ([`rounded_contact`]).
 pub(crate) fn contact(
     pose1: &Pose,
     shape1: &dyn Shape,
@@ -187,9 +189,9 @@ fn round_and_box(shape1: &dyn Shape, shape2: &dyn Shape) -> bool {
 /// are not beside its axis; `Some(None)` when they are farther apart than
 /// `prediction`.
 ///
-/// The stage's contact samples keep parry's contact: rapier's contacts
-/// and its own CCD see parry's numbers, and the stage's hand-back rules
-/// are written against them.
+/// The stage's contact samples keep parry's contact (and, for a capsule,
+/// its cores' contact, [`rounded_contact`]): rapier's contacts see those
+/// numbers, and the stage's hand-back rules are written against them.
 fn round_cuboid(
     pose1: &Pose,
     g1: &dyn Shape,
@@ -534,9 +536,63 @@ impl AxesFirst {
         } else if let Some(c2) = g2.as_composite_shape() {
             let flipped = composite_contact(self, &pos12.inverse(), c2, g1, prediction, settle);
             return Ok(flipped.map(|c| c.flipped()));
+        } else if let Some(found) = rounded_contact(pos12, g1, g2, prediction) {
+            return Ok(found);
         }
         DefaultQueryDispatcher.contact(pos12, g1, g2, prediction)
     }
+}
+
+/// The contact of a pair with a rounded side (a capsule, a rounded box)
+/// as rapier's contacts measure it: parry's contact manifolds for such a
+/// pair (`contact_manifold_pfm_pfm`) run GJK on the cores (a capsule's
+/// axis segment) within the prediction plus the radii and move the
+/// witnesses out by them. parry's `contact` runs GJK on the whole rounded
+/// shapes instead, and EPA whenever they overlap (a capsule resting on a
+/// floor: 17 k instructions a call). Only for cores that are polytopes,
+/// where GJK ends on their closest features; on a cylinder's or cone's
+/// curved side it stops early, millimetres above the true distance, and
+/// parry's whole-shape answer is nearer. `None`: not such a pair (a ball
+/// or a half-space, whose contacts rapier measures otherwise, a curved
+/// core, or no rounding at all).
+fn rounded_contact(
+    pos12: &Pose,
+    g1: &dyn Shape,
+    g2: &dyn Shape,
+    prediction: Real,
+) -> Option<Option<Contact>> {
+    if !polytope_core(g1.shape_type()) || !polytope_core(g2.shape_type()) {
+        return None;
+    }
+    let (core1, r1) = g1.as_polygonal_feature_map()?;
+    let (core2, r2) = g2.as_polygonal_feature_map()?;
+    if r1 == 0.0 && r2 == 0.0 {
+        return None;
+    }
+    let found = details::contact_support_map_support_map(pos12, core1, core2, prediction + r1 + r2);
+    Some(found.map(|mut c| {
+        c.point1 += c.normal1 * r1;
+        c.point2 += c.normal2 * r2;
+        c.dist -= r1 + r2;
+        c
+    }))
+}
+
+/// Whether a shape's core, as parry's contact manifolds see it, is a
+/// polytope: a capsule's segment, a rounded box's box.
+fn polytope_core(shape: ShapeType) -> bool {
+    use ShapeType::*;
+    matches!(
+        shape,
+        Capsule
+            | Cuboid
+            | Triangle
+            | Segment
+            | ConvexPolyhedron
+            | RoundCuboid
+            | RoundTriangle
+            | RoundConvexPolyhedron
+    )
 }
 
 impl QueryDispatcher for AxesFirst {
@@ -1020,7 +1076,7 @@ mod tests {
     /// the band along the closest points' direction, parry's contact puts
     /// it there too, with nearly that normal, and where it finds nothing
     /// within the prediction, parry finds nothing; elsewhere its answer is
-    /// parry's own.
+    /// [`contact`]'s.
     #[test]
     fn start_contacts_of_round_shapes_and_boxes_agree_with_parrys() {
         let mut next = uniform(23u64);
@@ -1068,7 +1124,12 @@ mod tests {
                     }
                     StartContact::Found(Some(c)) => {
                         parrys += 1;
-                        assert_eq!(c.dist, parry.dist, "case {case} flip {flip}");
+                        let asked = contact(p1, s1, p2, s2, prediction).expect("supported");
+                        assert_eq!(
+                            Some(c.dist),
+                            asked.map(|a| a.dist),
+                            "case {case} flip {flip}"
+                        );
                     }
                 }
             }
@@ -1077,6 +1138,179 @@ mod tests {
             apart > 500 && beyond > 500 && parrys > 500,
             "{apart} apart, {beyond} beyond, {parrys} parry's"
         );
+    }
+
+    /// A rounded shape (capsules, a rounded box) against boxes, triangles,
+    /// capsules, cylinders and cones at random poses, apart and
+    /// overlapping, both orders. Against the polytope cores [`contact`]
+    /// measures the pair as rapier's contacts do: its distance and normal
+    /// are those of the closest-points contact in parry's contact manifold
+    /// for the pair (the cores' GJK, which the manifold carries beside its
+    /// features' clipped points), and within 0.1 mm of the truth
+    /// (parry3d-f64's on the cores). Against a cylinder or a cone it is
+    /// parry's whole-shape answer itself.
+    #[test]
+    fn rounded_contacts_are_rapiers_manifolds() {
+        use rapier3d::parry::query::{ContactManifold, PersistentQueryDispatcher};
+        use rapier3d::parry::shape::{Cone, RoundCuboid};
+        let mut next = uniform(31u64);
+        let (mut overlapping, mut apart, mut curved) = (0, 0, 0);
+        for case in 0..3000 {
+            let rounded: Box<dyn Shape> = if case % 3 == 2 {
+                let half = Vector::new(
+                    0.05 + 0.3 * next(),
+                    0.05 + 0.3 * next(),
+                    0.05 + 0.3 * next(),
+                );
+                Box::new(RoundCuboid {
+                    inner_shape: Cuboid::new(half),
+                    border_radius: 0.02 + 0.1 * next(),
+                })
+            } else {
+                Box::new(Capsule::new_y(0.05 + 0.5 * next(), 0.02 + 0.3 * next()))
+            };
+            let (a, b) = (0.05 + 0.5 * next(), 0.05 + 0.5 * next());
+            let other: Box<dyn Shape> = match case % 5 {
+                0 => Box::new(Cuboid::new(Vector::new(a, b, 0.05 + next()))),
+                1 => Box::new(Triangle::new(
+                    Vector::new(-a, 0.0, -b),
+                    Vector::new(a, 0.1, -b),
+                    Vector::new(0.0, -0.1, b),
+                )),
+                2 => Box::new(Capsule::new_x(a, 0.02 + 0.2 * b)),
+                3 => Box::new(Cylinder::new(a, b)),
+                _ => Box::new(Cone::new(a, b)),
+            };
+            let at = Vector::new(next() - 0.5, next() - 0.5, next() - 0.5) * 1.5;
+            let rounded_pose = Pose::from_parts(at, turn(&mut next));
+            let other_pose = Pose::from_parts(Vector::ZERO, turn(&mut next));
+            let prediction = 0.3 * next();
+            for flip in [false, true] {
+                let (p1, s1, p2, s2): (_, &dyn Shape, _, &dyn Shape) = if flip {
+                    (&other_pose, &*other, &rounded_pose, &*rounded)
+                } else {
+                    (&rounded_pose, &*rounded, &other_pose, &*other)
+                };
+                let ours = contact(p1, s1, p2, s2, prediction).expect("supported");
+                let whole =
+                    rapier3d::parry::query::contact(p1, s1, p2, s2, prediction).expect("supported");
+                if case % 5 >= 3 {
+                    curved += 1;
+                    assert_eq!(
+                        ours.map(|c| c.dist),
+                        whole.map(|w| w.dist),
+                        "case {case} flip {flip}"
+                    );
+                    continue;
+                }
+                let mut manifolds: Vec<ContactManifold<(), ()>> = Vec::new();
+                DefaultQueryDispatcher
+                    .contact_manifolds(
+                        &p1.inv_mul(p2),
+                        s1,
+                        s2,
+                        prediction,
+                        &mut manifolds,
+                        &mut None,
+                    )
+                    .expect("supported");
+                // The manifold's point nearest ours in distance: the
+                // cores' GJK point, beside the features' clipped points.
+                let points = || {
+                    manifolds
+                        .iter()
+                        .flat_map(|m| m.points.iter().map(move |p| (p.dist, m.local_n1)))
+                };
+                let (Some(c), Some(_)) = (ours, points().next()) else {
+                    assert!(
+                        ours.is_none() && points().all(|p| p.0 > prediction - 1.0e-5),
+                        "case {case} flip {flip}: {ours:?} vs the manifold's {:?}",
+                        points().collect::<Vec<_>>()
+                    );
+                    continue;
+                };
+                let (dist, local_n1) = points()
+                    .min_by(|x, y| (x.0 - c.dist).abs().total_cmp(&(y.0 - c.dist).abs()))
+                    .expect("a point");
+                if c.dist < 0.0 {
+                    overlapping += 1;
+                } else {
+                    apart += 1;
+                }
+                assert!(
+                    (c.dist - dist).abs() < 1.0e-5,
+                    "case {case} flip {flip}: {} vs the manifold's {dist}",
+                    c.dist
+                );
+                assert!(
+                    c.normal1.dot(p1.rotation * local_n1) > 0.9999,
+                    "case {case} flip {flip}: normal {:?} vs the manifold's {:?}",
+                    c.normal1,
+                    p1.rotation * local_n1
+                );
+                // The truth: parry3d-f64's contact of the cores (polytopes,
+                // on which its GJK and EPA end on the closest features),
+                // less the radii. Ours is within the `f32` poses' rounding
+                // of it; parry's on the whole shapes stops above it (by up
+                // to 7 mm here) where they are apart.
+                let ((c1, r1), (c2, r2)) = (core64(s1), core64(s2));
+                let truth = parry3d_f64::query::contact(
+                    &pose64_from_iso(&iso_from_pose(p1)),
+                    &*c1,
+                    &pose64_from_iso(&iso_from_pose(p2)),
+                    &*c2,
+                    10.0,
+                )
+                .expect("supported")
+                .expect("within 10 m")
+                .dist
+                    - r1
+                    - r2;
+                assert!(
+                    (f64::from(c.dist) - truth).abs() < 1.0e-4,
+                    "case {case} flip {flip}: {} vs the truth {truth}",
+                    c.dist
+                );
+                if let Some(w) = whole
+                    && w.dist >= 0.0
+                {
+                    assert!(
+                        f64::from(w.dist) > truth - 1.0e-4,
+                        "case {case}: {}",
+                        w.dist
+                    );
+                }
+            }
+        }
+        assert!(
+            overlapping > 500 && apart > 500 && curved > 1000,
+            "{overlapping} overlapping, {apart} apart, {curved} curved"
+        );
+    }
+
+    /// A polytope core of a shape in parry3d-f64 and its radius: a
+    /// capsule's segment, a rounded box's box, a box or a triangle itself.
+    fn core64(shape: &dyn Shape) -> (Box<dyn parry3d_f64::shape::Shape>, f64) {
+        use parry3d_f64::shape::{
+            Cuboid as Cuboid64, Segment as Segment64, Triangle as Triangle64,
+        };
+        let wide = |v: Vector| Vec64::new(v.x.into(), v.y.into(), v.z.into());
+        match shape.as_typed_shape() {
+            TypedShape::Capsule(c) => (
+                Box::new(Segment64::new(wide(c.segment.a), wide(c.segment.b))),
+                c.radius.into(),
+            ),
+            TypedShape::RoundCuboid(r) => (
+                Box::new(Cuboid64::new(wide(r.inner_shape.half_extents))),
+                r.border_radius.into(),
+            ),
+            TypedShape::Cuboid(c) => (Box::new(Cuboid64::new(wide(c.half_extents))), 0.0),
+            TypedShape::Triangle(t) => (
+                Box::new(Triangle64::new(wide(t.a), wide(t.b), wide(t.c))),
+                0.0,
+            ),
+            _ => panic!("not a polytope core"),
+        }
     }
 
     /// A cylinder and a box: where the closed form answers (apart, the
