@@ -1000,6 +1000,11 @@ mod tests {
         Rotation::from_axis_angle(axis, 6.0 * next())
     }
 
+    /// A parry vector in parry3d-f64's (exact: every `f32` is an `f64`).
+    fn wide(v: Vector) -> Vec64 {
+        Vec64::new(v.x.into(), v.y.into(), v.z.into())
+    }
+
     /// Boxes and balls dropped onto both floors at random: the contact
     /// asked through [`AxesFirst`] is parry's own (its composite contacts
     /// run EPA per triangle) on nearly every pose, both argument orders.
@@ -1316,7 +1321,6 @@ mod tests {
         use parry3d_f64::shape::{
             Cuboid as Cuboid64, Segment as Segment64, Triangle as Triangle64,
         };
-        let wide = |v: Vector| Vec64::new(v.x.into(), v.y.into(), v.z.into());
         match shape.as_typed_shape() {
             TypedShape::Capsule(c) => (
                 Box::new(Segment64::new(wide(c.segment.a), wide(c.segment.b))),
@@ -1349,14 +1353,9 @@ mod tests {
         for case in 0..3000 {
             let cylinder = Cylinder::new(0.05 + 0.5 * next(), 0.02 + 0.3 * next());
             let cuboid = Cuboid::new(Vector::new(0.05 + next(), 0.05 + next(), 0.05 + next()));
-            let wide = f64::from;
-            let cylinder64 = Cylinder64::new(wide(cylinder.half_height), wide(cylinder.radius));
+            let cylinder64 = Cylinder64::new(cylinder.half_height.into(), cylinder.radius.into());
             let h = cuboid.half_extents;
-            let cuboid64 = Cuboid64::new(parry3d_f64::math::Vector::new(
-                wide(h.x),
-                wide(h.y),
-                wide(h.z),
-            ));
+            let cuboid64 = Cuboid64::new(wide(h));
             let at = Vector::new(3.0 * next() - 1.5, 3.0 * next() - 1.5, 3.0 * next() - 1.5);
             let cylinder_pose = Pose::from_parts(at, turn(&mut next));
             let box_pose = Pose::from_parts(Vector::ZERO, turn(&mut next));
@@ -1446,7 +1445,6 @@ mod tests {
         use parry3d_f64::shape::{Cuboid as Cuboid64, Triangle as Triangle64};
         use rapier3d::parry::shape::Triangle;
         let mut next = uniform(5u64);
-        let wide = |v: Vector| parry3d_f64::math::Vector::new(v.x.into(), v.y.into(), v.z.into());
         let (mut apart, mut answered) = (0, 0);
         let mut worst = [0.0f64; 2];
         for case in 0..2000 {
